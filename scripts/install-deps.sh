@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs every Debian package Parallax needs to build and test. Idempotent: prints nothing
+# and touches nothing when all are already installed.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libceres-dev libsqlite3-dev sqlite3
+  libopencv-core-dev libopencv-imgcodecs-dev libopencv-imgproc-dev
+  libopencv-features2d-dev libopencv-calib3d-dev
+  libcli11-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+# Extra packages for optional checks, installed when asked: PARALLAX_EXTRA_DEPS=1.
+if [[ "${PARALLAX_EXTRA_DEPS:-0}" == "1" ]]; then
+  packages+=(chromium clang-14 libclang-rt-14-dev)
+fi
+
+missing=()
+for package in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$package")
+  fi
+done
+[[ ${#missing[@]} -eq 0 ]] && exit 0
+
+echo "install-deps: installing ${missing[*]}" >&2
+sudo_cmd=()
+[[ $(id -u) -ne 0 ]] && sudo_cmd=(sudo)
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

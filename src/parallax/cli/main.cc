@@ -1,0 +1,45 @@
+// parallax: incremental Structure from Motion. Dispatches to one subcommand per stage.
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "parallax/cli/commands.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  const char* description;
+  int (*run)(int argc, char** argv);
+};
+
+// The table of subcommands, in the order a user meets them.
+constexpr Command kCommands[] = {
+    {"version", "Print the version", parallax::cli::RunVersion},
+};
+
+void PrintUsage() {
+  std::cout << "Parallax: incremental Structure from Motion.\n\n"
+               "Usage: parallax <command> [options]\n"
+               "       parallax <command> --help\n\nCommands:\n";
+  for (const Command& command : kCommands) {
+    std::string name = command.name;
+    name.resize(14, ' ');
+    std::cout << "  " << name << command.description << "\n";
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
+      std::strcmp(argv[1], "help") == 0) {
+    PrintUsage();
+    return argc < 2 ? 1 : 0;
+  }
+  for (const Command& command : kCommands) {
+    if (std::strcmp(argv[1], command.name) == 0) return command.run(argc - 1, argv + 1);
+  }
+  std::cerr << "error: unknown command '" << argv[1] << "' (see parallax --help)" << std::endl;
+  return 2;
+}

@@ -1,0 +1,17 @@
+#include <iostream>
+
+#include "parallax/cli/cli_common.h"
+#include "parallax/cli/commands.h"
+
+namespace parallax::cli {
+
+int RunVersion(int argc, char** argv) {
+  CLI::App app("Print the version of Parallax", "parallax version");
+  VerbosityFlags flags;
+  return RunCommand(app, argc, argv, flags, [] {
+    std::cout << "parallax 0.1.0" << std::endl;
+    return 0;
+  });
+}
+
+}  // namespace parallax::cli

@@ -1,0 +1,215 @@
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <vector>
+
+#include "parallax/math/random.h"
+#include "parallax/util/check.h"
+
+namespace parallax {
+
+// The one RANSAC of Parallax. An estimator is any type with
+//
+//   using X_t = ...; using Y_t = ...; using M_t = ...;
+//   static constexpr int kMinNumSamples = ...;
+//   // Every model consistent with the points (minimal or least squares on more); may return none.
+//   void Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y, std::vector<M_t>* models) const;
+//   // Squared residual of every correspondence under `model`.
+//   void Residuals(const std::vector<X_t>& X, const std::vector<Y_t>& Y, const M_t& model,
+//                  std::vector<double>* squared_residuals) const;
+//
+// LoRansac draws minimal samples, scores each model by MSAC (sum of truncated squared
+// residuals), and whenever a new best model appears runs local optimisation: the local
+// estimator (non-minimal, e.g. the 8-point on all inliers) re-fits on the inliers, iterated
+// while the score improves (Chum et al., "Locally Optimized RANSAC", 2003). The number of
+// trials adapts to the best inlier ratio seen.
+
+struct RansacOptions {
+  // Inlier threshold on the residual (the estimator's unit, not squared).
+  double max_error = 1.0;
+  // Lowest inlier ratio searched for: bounds the number of trials from above.
+  double min_inlier_ratio = 0.1;
+  // Probability of having drawn at least one all-inlier sample when stopping.
+  double confidence = 0.9999;
+  // Multiplier on the adaptive trial count (>1 to be conservative with non-uniform outliers).
+  double dynamic_num_trials_multiplier = 3.0;
+  int min_num_trials = 0;
+  int max_num_trials = 10000;
+  // Local optimisation rounds per new best model (0 disables LO).
+  int local_optimization_iterations = 10;
+
+  void Check() const {
+    PARALLAX_CHECK_GT(max_error, 0.0);
+    PARALLAX_CHECK(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0);
+    PARALLAX_CHECK(confidence > 0.0 && confidence < 1.0);
+    PARALLAX_CHECK_GE(dynamic_num_trials_multiplier, 0.0);
+    PARALLAX_CHECK_GE(min_num_trials, 0);
+    PARALLAX_CHECK_LE(min_num_trials, max_num_trials);
+    PARALLAX_CHECK_GE(local_optimization_iterations, 0);
+  }
+};
+
+template <typename Model>
+struct RansacReport {
+  bool success = false;
+  size_t num_trials = 0;
+  size_t num_inliers = 0;
+  // 1 for inliers of `model`, one entry per correspondence.
+  std::vector<char> inlier_mask;
+  Model model;
+};
+
+// Number of trials needed to draw one all-inlier sample of size `sample_size` with
+// probability `confidence`, given the inlier ratio.
+inline size_t ComputeNumRansacTrials(size_t num_inliers, size_t num_samples, size_t sample_size,
+                                     double confidence, double multiplier) {
+  const double inlier_ratio = static_cast<double>(num_inliers) / num_samples;
+  const double all_inlier_probability = std::pow(inlier_ratio, static_cast<double>(sample_size));
+  if (all_inlier_probability <= std::numeric_limits<double>::epsilon()) {
+    return std::numeric_limits<size_t>::max();
+  }
+  if (all_inlier_probability >= 1.0 - std::numeric_limits<double>::epsilon()) return 1;
+  const double trials = std::log(1.0 - confidence) / std::log(1.0 - all_inlier_probability);
+  return static_cast<size_t>(std::ceil(multiplier * trials));
+}
+
+template <typename Estimator, typename LocalEstimator = Estimator>
+class LoRansac {
+ public:
+  using X_t = typename Estimator::X_t;
+  using Y_t = typename Estimator::Y_t;
+  using M_t = typename Estimator::M_t;
+  using Report = RansacReport<M_t>;
+
+  explicit LoRansac(const RansacOptions& options, Estimator estimator = {},
+                    LocalEstimator local_estimator = {})
+      : options_(options), estimator_(std::move(estimator)),
+        local_estimator_(std::move(local_estimator)) {
+    options_.Check();
+  }
+
+  Report Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y) const {
+    PARALLAX_CHECK_EQ(X.size(), Y.size());
+    Report report;
+    const size_t num_samples = X.size();
+    constexpr size_t kSampleSize = Estimator::kMinNumSamples;
+    if (num_samples < kSampleSize) return report;
+
+    const double max_squared_error = options_.max_error * options_.max_error;
+    std::vector<size_t> indices(num_samples);
+    std::iota(indices.begin(), indices.end(), 0);
+    std::vector<X_t> X_sample(kSampleSize);
+    std::vector<Y_t> Y_sample(kSampleSize);
+    std::vector<M_t> models;
+    std::vector<double> residuals;
+
+    Score best;
+    M_t best_model{};
+    size_t max_trials = static_cast<size_t>(options_.max_num_trials);
+    max_trials = std::min(max_trials, ComputeNumRansacTrials(
+        static_cast<size_t>(std::ceil(options_.min_inlier_ratio * num_samples)), num_samples,
+        kSampleSize, options_.confidence, options_.dynamic_num_trials_multiplier));
+    max_trials = std::max(max_trials, static_cast<size_t>(options_.min_num_trials));
+
+    size_t trial = 0;
+    for (; trial < max_trials; ++trial) {
+      Shuffle(kSampleSize, &indices);
+      for (size_t i = 0; i < kSampleSize; ++i) {
+        X_sample[i] = X[indices[i]];
+        Y_sample[i] = Y[indices[i]];
+      }
+      models.clear();
+      estimator_.Estimate(X_sample, Y_sample, &models);
+      for (const M_t& model : models) {
+        const Score score = ScoreModel(X, Y, model, max_squared_error, &residuals);
+        if (!score.BetterThan(best)) continue;
+        best = score;
+        best_model = model;
+        if (options_.local_optimization_iterations > 0) {
+          LocalOptimize(X, Y, max_squared_error, &best, &best_model, &residuals);
+        }
+        const size_t needed = ComputeNumRansacTrials(best.num_inliers, num_samples, kSampleSize,
+                                                     options_.confidence,
+                                                     options_.dynamic_num_trials_multiplier);
+        max_trials = std::max<size_t>(std::min(max_trials, needed), options_.min_num_trials);
+      }
+    }
+
+    report.num_trials = trial;
+    if (best.num_inliers < kSampleSize) return report;
+    report.success = true;
+    report.model = best_model;
+    estimator_.Residuals(X, Y, best_model, &residuals);
+    report.inlier_mask.resize(num_samples);
+    report.num_inliers = 0;
+    for (size_t i = 0; i < num_samples; ++i) {
+      report.inlier_mask[i] = residuals[i] <= max_squared_error;
+      report.num_inliers += report.inlier_mask[i];
+    }
+    return report;
+  }
+
+ private:
+  struct Score {
+    size_t num_inliers = 0;
+    double msac = std::numeric_limits<double>::max();
+    bool BetterThan(const Score& other) const { return msac < other.msac; }
+  };
+
+  Score ScoreModel(const std::vector<X_t>& X, const std::vector<Y_t>& Y, const M_t& model,
+                   double max_squared_error, std::vector<double>* residuals) const {
+    estimator_.Residuals(X, Y, model, residuals);
+    Score score;
+    score.msac = 0;
+    for (double r : *residuals) {
+      // NaN residuals (degenerate model) count as outliers.
+      if (r <= max_squared_error) {
+        ++score.num_inliers;
+        score.msac += r;
+      } else {
+        score.msac += max_squared_error;
+      }
+    }
+    return score;
+  }
+
+  void LocalOptimize(const std::vector<X_t>& X, const std::vector<Y_t>& Y, double max_squared_error,
+                     Score* best, M_t* best_model, std::vector<double>* residuals) const {
+    std::vector<X_t> X_inliers;
+    std::vector<Y_t> Y_inliers;
+    std::vector<M_t> local_models;
+    for (int iteration = 0; iteration < options_.local_optimization_iterations; ++iteration) {
+      estimator_.Residuals(X, Y, *best_model, residuals);
+      X_inliers.clear();
+      Y_inliers.clear();
+      for (size_t i = 0; i < X.size(); ++i) {
+        if ((*residuals)[i] <= max_squared_error) {
+          X_inliers.push_back(X[i]);
+          Y_inliers.push_back(Y[i]);
+        }
+      }
+      if (X_inliers.size() < static_cast<size_t>(LocalEstimator::kMinNumSamples)) return;
+      local_models.clear();
+      local_estimator_.Estimate(X_inliers, Y_inliers, &local_models);
+      bool improved = false;
+      for (const M_t& model : local_models) {
+        const Score score = ScoreModel(X, Y, model, max_squared_error, residuals);
+        if (score.BetterThan(*best)) {
+          *best = score;
+          *best_model = model;
+          improved = true;
+        }
+      }
+      if (!improved) return;
+    }
+  }
+
+  RansacOptions options_;
+  Estimator estimator_;
+  LocalEstimator local_estimator_;
+};
+
+}  // namespace parallax

@@ -1,0 +1,80 @@
+#include "parallax/optim/ransac.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+namespace parallax {
+namespace {
+
+// Fits y = a x + b: minimal with two points, least squares with more.
+struct LineEstimator {
+  using X_t = double;
+  using Y_t = double;
+  using M_t = Eigen::Vector2d;
+  static constexpr int kMinNumSamples = 2;
+
+  void Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y,
+                std::vector<M_t>* models) const {
+    Eigen::MatrixXd A(X.size(), 2);
+    Eigen::VectorXd b(X.size());
+    for (size_t i = 0; i < X.size(); ++i) {
+      A(i, 0) = X[i];
+      A(i, 1) = 1;
+      b(i) = Y[i];
+    }
+    const Eigen::Vector2d model = A.colPivHouseholderQr().solve(b);
+    if (model.allFinite()) models->push_back(model);
+  }
+  void Residuals(const std::vector<X_t>& X, const std::vector<Y_t>& Y, const M_t& model,
+                 std::vector<double>* residuals) const {
+    residuals->resize(X.size());
+    for (size_t i = 0; i < X.size(); ++i) {
+      const double r = Y[i] - (model(0) * X[i] + model(1));
+      (*residuals)[i] = r * r;
+    }
+  }
+};
+
+TEST(LoRansac, RecoversLineWithHalfOutliers) {
+  SetPRNGSeed(7);
+  std::vector<double> X, Y;
+  std::vector<bool> truth;
+  for (int i = 0; i < 400; ++i) {
+    const double x = RandomUniformReal(-10, 10);
+    const bool inlier = i % 2 == 0;
+    X.push_back(x);
+    Y.push_back(inlier ? 2 * x - 1 + RandomGaussian(0, 0.05) : RandomUniformReal(-30, 30));
+    truth.push_back(inlier);
+  }
+  RansacOptions options;
+  options.max_error = 0.2;
+  LoRansac<LineEstimator> ransac(options);
+  const auto report = ransac.Estimate(X, Y);
+  ASSERT_TRUE(report.success);
+  EXPECT_NEAR(report.model(0), 2.0, 0.01);
+  EXPECT_NEAR(report.model(1), -1.0, 0.02);
+  size_t true_inliers_kept = 0, outliers_kept = 0;
+  for (size_t i = 0; i < X.size(); ++i) {
+    if (report.inlier_mask[i] && truth[i]) ++true_inliers_kept;
+    if (report.inlier_mask[i] && !truth[i]) ++outliers_kept;
+  }
+  EXPECT_GE(true_inliers_kept, 195u);
+  EXPECT_LE(outliers_kept, 4u);
+  EXPECT_LT(report.num_trials, 1000u);
+}
+
+TEST(LoRansac, TooFewPointsFails) {
+  LoRansac<LineEstimator> ransac(RansacOptions{});
+  const auto report = ransac.Estimate({1.0}, {2.0});
+  EXPECT_FALSE(report.success);
+}
+
+TEST(LoRansac, InvalidOptionsThrow) {
+  RansacOptions options;
+  options.max_error = -1;
+  EXPECT_THROW(LoRansac<LineEstimator>{options}, CheckError);
+}
+
+}  // namespace
+}  // namespace parallax
