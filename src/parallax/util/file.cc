@@ -79,7 +79,11 @@ void CreateDirectoryOrThrow(const std::filesystem::path& dir) {
 std::filesystem::path DataRoot() {
   const char* value = std::getenv("PARALLAX_DATA");
   if (value != nullptr && value[0] != '\0') return value;
+#ifdef PARALLAX_SOURCE_DIR
+  return std::filesystem::path(PARALLAX_SOURCE_DIR) / ".." / "shared" / "data";
+#else
   return "../shared/data";
+#endif
 }
 
 }  // namespace parallax

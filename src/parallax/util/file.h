@@ -27,7 +27,7 @@ std::string Trim(const std::string& text);
 // Creates `dir` (and parents) or throws InputError with a one-line reason.
 void CreateDirectoryOrThrow(const std::filesystem::path& dir);
 
-// Value of environment variable PARALLAX_DATA, or "../shared/data" when unset.
+// The datasets folder: $PARALLAX_DATA, or ../shared/data beside the source checkout when unset.
 std::filesystem::path DataRoot();
 
 }  // namespace parallax

@@ -1,0 +1,61 @@
+#pragma once
+
+#include <set>
+#include <string>
+#include <unordered_set>
+
+#include "parallax/scene/reconstruction.h"
+#include "parallax/util/types.h"
+
+namespace parallax {
+
+enum class LossFunctionType { kTrivial, kHuber, kSoftLOne, kCauchy };
+
+struct BundleAdjustmentOptions {
+  LossFunctionType loss_function = LossFunctionType::kCauchy;
+  double loss_scale_px = 1.0;         // Robust loss scale on reprojection error, pixels.
+  bool refine_focal_length = false;
+  bool refine_principal_point = false;
+  bool refine_extra_params = false;
+  int max_num_iterations = 100;
+  double function_tolerance = 1e-6;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
+  int num_threads = -1;               // -1: all cores.
+  bool print_summary = false;         // Ceres' report to the log at debug level.
+  void Check() const;
+};
+
+// Which images and points take part and what is held constant. Points observed by the
+// images are included automatically; observations in images outside the config make the
+// point constant unless the point is listed in variable_points.
+struct BundleAdjustmentConfig {
+  std::set<image_t> images;
+  std::set<image_t> constant_poses;
+  // Images whose translation is fixed in one coordinate (gauge): image id and index 0..2.
+  std::set<std::pair<image_t, int>> constant_translation_coordinates;
+  std::set<point3D_t> constant_points;
+  std::set<camera_t> constant_cameras;
+
+  void AddImage(image_t image_id) { images.insert(image_id); }
+  void SetConstantPose(image_t image_id) { constant_poses.insert(image_id); }
+};
+
+struct BundleAdjustmentSummary {
+  bool success = false;
+  double initial_cost = 0;       // Ceres cost (0.5 sum of squared robustified residuals).
+  double final_cost = 0;
+  int num_iterations = 0;
+  size_t num_residuals = 0;
+  double seconds = 0;
+  std::string termination;       // Ceres' termination type and message.
+};
+
+// Minimises reprojection error over poses, points and (optionally) intrinsics with Ceres:
+// Levenberg-Marquardt trust region, Schur-complement linear solver (dense for small
+// problems, sparse otherwise), robust loss, multi-threaded.
+BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
+                                     const BundleAdjustmentConfig& config,
+                                     Reconstruction* reconstruction);
+
+}  // namespace parallax

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "parallax/feature/types.h"
+#include "parallax/optim/ransac.h"
+#include "parallax/scene/camera.h"
+#include "parallax/scene/two_view_geometry.h"
+
+namespace parallax {
+
+struct TwoViewGeometryOptions {
+  int min_num_inliers = 15;           // Fewer inliers: the pair is degenerate.
+  double max_error_px = 4.0;          // RANSAC threshold in pixels (F, H; E scaled by focal).
+  double confidence = 0.9999;
+  int max_num_trials = 10000;
+  double min_inlier_ratio = 0.25;
+  // Planar/panoramic classification (COLMAP's rules).
+  double min_E_F_inlier_ratio = 0.95;  // E explains F's inliers: calibrated.
+  double max_H_inlier_ratio = 0.8;     // H explains more than this of the inliers: planar.
+  double watermark_min_inlier_ratio = 0.7;
+  // Use the essential matrix when both cameras have a prior focal length.
+  bool use_essential_when_calibrated = true;
+  // Compute cam2_from_cam1 and tri_angle for calibrated/uncalibrated pairs.
+  bool compute_relative_pose = true;
+  void Check() const;
+};
+
+// Verifies putative matches between two images with LO-RANSAC around the normalized
+// 8-point fundamental matrix (7-point samples), the 5-point essential matrix when the
+// cameras are calibrated, and the 4-point homography; classifies the pair as COLMAP does.
+// points1/points2 are all keypoints of each image in pixels.
+TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
+                                        const std::vector<Eigen::Vector2d>& points1,
+                                        const Camera& camera2,
+                                        const std::vector<Eigen::Vector2d>& points2,
+                                        const FeatureMatches& matches,
+                                        const TwoViewGeometryOptions& options);
+
+// Relative pose and median triangulation angle of a verified pair from its E (or F and the
+// cameras, or H): fills geometry->cam2_from_cam1 and tri_angle. False when no pose.
+bool EstimateTwoViewGeometryPose(const Camera& camera1, const std::vector<Eigen::Vector2d>& points1,
+                                 const Camera& camera2, const std::vector<Eigen::Vector2d>& points2,
+                                 TwoViewGeometry* geometry);
+
+}  // namespace parallax

@@ -1,0 +1,34 @@
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+
+#include "parallax/feature/types.h"
+
+namespace parallax {
+
+// SIFT settings; defaults are the paper's (Lowe 2004 as configured in Zeeshan et al.).
+struct SiftExtractionOptions {
+  int max_num_features = 8192;       // Keep the strongest (largest response) keypoints.
+  int max_image_size = 3200;         // Downscale larger images (longest side), rescale keypoints.
+  int num_octave_layers = 3;         // Layers per octave.
+  double contrast_threshold = 0.04;  // OpenCV convention (divided by layers internally).
+  double edge_threshold = 10.0;
+  double sigma = 1.6;
+  bool root_sift = true;             // L1-normalise, square-root (Arandjelovic & Zisserman 2012).
+  void Check() const;
+};
+
+// Extraction behind an interface so a native SIFT can replace OpenCV's.
+class FeatureExtractor {
+ public:
+  virtual ~FeatureExtractor() = default;
+  // `gray` is CV_8UC1. Keypoints use COLMAP's convention (pixel centres at +0.5).
+  // Descriptors are unit-L2 vectors quantised to uint8 (x 512, clamped), one row each.
+  virtual void Extract(const cv::Mat& gray, FeatureKeypoints* keypoints,
+                       FeatureDescriptors* descriptors) const = 0;
+};
+
+std::unique_ptr<FeatureExtractor> CreateSiftExtractor(const SiftExtractionOptions& options);
+
+}  // namespace parallax

@@ -1,0 +1,94 @@
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "parallax/feature/types.h"
+#include "parallax/scene/camera.h"
+#include "parallax/scene/image.h"
+#include "parallax/scene/two_view_geometry.h"
+#include "parallax/util/types.h"
+
+struct sqlite3;
+
+namespace parallax {
+
+// The feature and match store: SQLite with COLMAP 3.8's schema (tables cameras, images,
+// keypoints, descriptors, matches, two_view_geometries; the same blob layouts and pair_id
+// encoding), so `colmap mapper` reads a Parallax database and Parallax reads COLMAP's.
+// Every write is one transaction, so a run killed at any moment leaves a valid database.
+// Not thread-safe: one Database per thread, or serialise access.
+class Database {
+ public:
+  // Opens or creates the file (and its schema). Throws InputError naming the path when the
+  // file is not a database or the schema is not COLMAP's.
+  explicit Database(const std::filesystem::path& path);
+  ~Database();
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+
+  // Cameras. WriteCamera returns the new id (the camera's own id is ignored when
+  // use_camera_id is false).
+  camera_t WriteCamera(const Camera& camera, bool use_camera_id = false);
+  void UpdateCamera(const Camera& camera);
+  bool ExistsCamera(camera_t camera_id) const;
+  Camera ReadCamera(camera_t camera_id) const;
+  std::vector<Camera> ReadAllCameras() const;
+
+  // Images (name, camera id; poses are not stored, as in COLMAP 3.8's priors we ignore).
+  image_t WriteImage(const std::string& name, camera_t camera_id);
+  bool ExistsImage(image_t image_id) const;
+  std::optional<image_t> ImageIdByName(const std::string& name) const;
+  // Image with empty points2D (load keypoints separately).
+  Image ReadImage(image_t image_id) const;
+  std::vector<Image> ReadAllImages() const;
+
+  void WriteKeypoints(image_t image_id, const FeatureKeypoints& keypoints);
+  void WriteDescriptors(image_t image_id, const FeatureDescriptors& descriptors);
+  // Writes image row, keypoints and descriptors in one transaction (resumable extraction).
+  image_t WriteImageWithFeatures(const std::string& name, camera_t camera_id,
+                                 const FeatureKeypoints& keypoints,
+                                 const FeatureDescriptors& descriptors);
+  bool ExistsKeypoints(image_t image_id) const;
+  bool ExistsDescriptors(image_t image_id) const;
+  FeatureKeypoints ReadKeypoints(image_t image_id) const;
+  FeatureDescriptors ReadDescriptors(image_t image_id) const;
+  size_t NumKeypoints(image_t image_id) const;
+
+  // Matches of a pair; stored with the smaller image id first, swapped as needed.
+  void WriteMatches(image_t image_id1, image_t image_id2, const FeatureMatches& matches);
+  bool ExistsMatches(image_t image_id1, image_t image_id2) const;
+  FeatureMatches ReadMatches(image_t image_id1, image_t image_id2) const;
+  std::vector<std::pair<image_pair_t, FeatureMatches>> ReadAllMatches() const;
+
+  // Verified geometry; F, E, H are transposed/inverted as COLMAP does when the pair is
+  // stored swapped.
+  void WriteTwoViewGeometry(image_t image_id1, image_t image_id2, const TwoViewGeometry& geometry);
+  bool ExistsTwoViewGeometry(image_t image_id1, image_t image_id2) const;
+  TwoViewGeometry ReadTwoViewGeometry(image_t image_id1, image_t image_id2) const;
+  // (pair_id, geometry) for every stored pair, ids in stored order (image_id1 < image_id2).
+  std::vector<std::pair<image_pair_t, TwoViewGeometry>> ReadTwoViewGeometries() const;
+  // Number of inlier matches per pair with config other than degenerate/undefined.
+  std::vector<std::pair<image_pair_t, int>> ReadTwoViewGeometryNumInliers() const;
+
+  size_t NumCameras() const;
+  size_t NumImages() const;
+  size_t NumMatchedPairs() const;
+  size_t NumVerifiedPairs() const;
+
+  // Explicit transaction around many writes (faster); nesting is not supported.
+  void BeginTransaction();
+  void EndTransaction();
+
+  const std::filesystem::path& Path() const { return path_; }
+
+ private:
+  void Execute(const std::string& sql) const;
+  std::filesystem::path path_;
+  sqlite3* db_ = nullptr;
+};
+
+}  // namespace parallax
