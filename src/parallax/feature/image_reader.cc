@@ -1,0 +1,357 @@
+#include "parallax/feature/image_reader.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string_view>
+#include <system_error>
+
+#include "parallax/util/check.h"
+
+namespace parallax {
+namespace {
+
+// Random access to the first bytes of an image, from a file (header-only reads) or from memory.
+class ByteSource {
+ public:
+  virtual ~ByteSource() = default;
+  // Copies `size` bytes at `offset` into `out`; false when the source is shorter.
+  virtual bool Read(uint64_t offset, size_t size, uint8_t* out) = 0;
+};
+
+class FileByteSource : public ByteSource {
+ public:
+  explicit FileByteSource(const std::filesystem::path& path) : stream_(path, std::ios::binary) {}
+  bool IsOpen() const { return static_cast<bool>(stream_); }
+  bool Read(uint64_t offset, size_t size, uint8_t* out) override {
+    stream_.clear();
+    stream_.seekg(static_cast<std::streamoff>(offset));
+    if (!stream_) return false;
+    stream_.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(size));
+    return stream_.gcount() == static_cast<std::streamsize>(size);
+  }
+
+ private:
+  std::ifstream stream_;
+};
+
+class MemoryByteSource : public ByteSource {
+ public:
+  explicit MemoryByteSource(std::string_view data) : data_(data) {}
+  bool Read(uint64_t offset, size_t size, uint8_t* out) override {
+    if (offset > data_.size() || size > data_.size() - offset) return false;
+    std::memcpy(out, data_.data() + offset, size);
+    return true;
+  }
+
+ private:
+  std::string_view data_;
+};
+
+uint32_t BigEndian16(const uint8_t* bytes) { return (uint32_t{bytes[0]} << 8) | bytes[1]; }
+uint32_t BigEndian32(const uint8_t* bytes) {
+  return (uint32_t{bytes[0]} << 24) | (uint32_t{bytes[1]} << 16) | (uint32_t{bytes[2]} << 8) |
+         bytes[3];
+}
+uint32_t LittleEndian16(const uint8_t* bytes) { return (uint32_t{bytes[1]} << 8) | bytes[0]; }
+uint32_t LittleEndian32(const uint8_t* bytes) {
+  return (uint32_t{bytes[3]} << 24) | (uint32_t{bytes[2]} << 16) | (uint32_t{bytes[1]} << 8) |
+         bytes[0];
+}
+
+ImageFormat DetectFormat(ByteSource& source) {
+  std::array<uint8_t, 8> magic{};
+  if (!source.Read(0, 2, magic.data())) return ImageFormat::kUnknown;
+  const bool have8 = source.Read(0, 8, magic.data());
+  const bool have4 = have8 || source.Read(0, 4, magic.data());
+  static constexpr uint8_t kPngMagic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (have8 && std::memcmp(magic.data(), kPngMagic, 8) == 0) return ImageFormat::kPng;
+  if (have4 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff) return ImageFormat::kJpeg;
+  if (have4 && ((magic[0] == 'I' && magic[1] == 'I' && magic[2] == 42 && magic[3] == 0) ||
+                (magic[0] == 'M' && magic[1] == 'M' && magic[2] == 0 && magic[3] == 42))) {
+    return ImageFormat::kTiff;
+  }
+  // "BM" alone is weak evidence; require the 14-byte file header plus a DIB header size.
+  if (magic[0] == 'B' && magic[1] == 'M') {
+    uint8_t dib[4];
+    if (source.Read(14, 4, dib) && LittleEndian32(dib) >= 12) return ImageFormat::kBmp;
+  }
+  return ImageFormat::kUnknown;
+}
+
+std::optional<ImageSize> MakeSize(int64_t width, int64_t height) {
+  if (width <= 0 || height <= 0 || width > INT32_MAX || height > INT32_MAX) return std::nullopt;
+  return ImageSize{static_cast<int>(width), static_cast<int>(height)};
+}
+
+std::optional<ImageSize> ReadPngSize(ByteSource& source) {
+  // Signature (8), then the IHDR chunk: length (4), "IHDR", width (4), height (4), all big-endian.
+  uint8_t header[16];
+  if (!source.Read(8, 16, header) || std::memcmp(header + 4, "IHDR", 4) != 0) return std::nullopt;
+  return MakeSize(BigEndian32(header + 8), BigEndian32(header + 12));
+}
+
+bool IsJpegStartOfFrame(uint8_t marker) {
+  // SOF0..SOF15 except DHT (C4), JPG (C8) and DAC (CC).
+  return marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc;
+}
+
+// Walks the JPEG marker segments from SOI. Stops at the first frame header (SOFn) when
+// `scan_offset` is null, else continues to the first scan (SOS) and stores its offset there.
+// Segment lengths are followed, so markers inside APPn payloads (an EXIF thumbnail has its
+// own SOF, SOS and EOI) are never mistaken for the main image's.
+std::optional<ImageSize> WalkJpeg(ByteSource& source, uint64_t* scan_offset) {
+  std::optional<ImageSize> size;
+  uint64_t offset = 2;  // After SOI.
+  for (int segment = 0; segment < 10000; ++segment) {
+    uint8_t byte;
+    if (!source.Read(offset, 1, &byte) || byte != 0xff) return std::nullopt;
+    uint8_t marker = 0xff;
+    while (marker == 0xff) {  // Fill bytes may precede a marker.
+      if (!source.Read(++offset, 1, &marker)) return std::nullopt;
+    }
+    ++offset;
+    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd8)) continue;  // No payload.
+    if (marker == 0xd9) return std::nullopt;  // EOI before any scan.
+    if (marker == 0xda) {
+      if (size && scan_offset != nullptr) *scan_offset = offset;
+      return size;  // Scan data before a frame header: nullopt.
+    }
+    uint8_t length_bytes[2];
+    if (!source.Read(offset, 2, length_bytes)) return std::nullopt;
+    const uint32_t length = BigEndian16(length_bytes);
+    if (length < 2) return std::nullopt;
+    if (IsJpegStartOfFrame(marker) && !size) {
+      // Length (2), sample precision (1), height (2), width (2).
+      uint8_t frame[5];
+      if (length < 7 || !source.Read(offset + 2, 5, frame)) return std::nullopt;
+      size = MakeSize(BigEndian16(frame + 3), BigEndian16(frame + 1));
+      if (!size || scan_offset == nullptr) return size;
+    }
+    offset += length;
+  }
+  return std::nullopt;
+}
+
+std::optional<ImageSize> ReadJpegSize(ByteSource& source) { return WalkJpeg(source, nullptr); }
+
+std::optional<ImageSize> ReadBmpSize(ByteSource& source) {
+  // 14-byte file header, then the DIB header; BITMAPCOREHEADER (12 bytes) has 16-bit sizes,
+  // the later ones 32-bit signed sizes (negative height: rows stored top-down).
+  uint8_t dib[12];
+  if (!source.Read(14, 12, dib)) return std::nullopt;
+  const uint32_t dib_size = LittleEndian32(dib);
+  if (dib_size == 12) return MakeSize(LittleEndian16(dib + 4), LittleEndian16(dib + 6));
+  if (dib_size < 16) return std::nullopt;
+  const auto width = static_cast<int32_t>(LittleEndian32(dib + 4));
+  const auto height = static_cast<int32_t>(LittleEndian32(dib + 8));
+  return MakeSize(width, height == INT32_MIN ? int64_t{0} : std::abs(int64_t{height}));
+}
+
+std::optional<ImageSize> ReadTiffSize(ByteSource& source) {
+  uint8_t header[8];
+  if (!source.Read(0, 8, header)) return std::nullopt;
+  const bool little = header[0] == 'I';
+  auto read16 = [little](const uint8_t* bytes) {
+    return little ? LittleEndian16(bytes) : BigEndian16(bytes);
+  };
+  auto read32 = [little](const uint8_t* bytes) {
+    return little ? LittleEndian32(bytes) : BigEndian32(bytes);
+  };
+  // The first IFD holds the full-resolution image; tags 256 (width) and 257 (length), stored
+  // inline as SHORT (type 3) or LONG (type 4).
+  const uint64_t ifd_offset = read32(header + 4);
+  uint8_t count_bytes[2];
+  if (!source.Read(ifd_offset, 2, count_bytes)) return std::nullopt;
+  const uint32_t num_entries = read16(count_bytes);
+  int64_t width = -1, height = -1;
+  for (uint32_t i = 0; i < num_entries && (width < 0 || height < 0); ++i) {
+    uint8_t entry[12];
+    if (!source.Read(ifd_offset + 2 + 12 * uint64_t{i}, 12, entry)) return std::nullopt;
+    const uint32_t tag = read16(entry);
+    if (tag != 256 && tag != 257) continue;
+    const uint32_t type = read16(entry + 2);
+    int64_t value;
+    if (type == 3) {
+      value = read16(entry + 8);
+    } else if (type == 4) {
+      value = read32(entry + 8);
+    } else {
+      return std::nullopt;
+    }
+    (tag == 256 ? width : height) = value;
+  }
+  return MakeSize(width, height);
+}
+
+std::optional<ImageSize> ReadSize(ImageFormat format, ByteSource& source) {
+  switch (format) {
+    case ImageFormat::kPng:
+      return ReadPngSize(source);
+    case ImageFormat::kJpeg:
+      return ReadJpegSize(source);
+    case ImageFormat::kBmp:
+      return ReadBmpSize(source);
+    case ImageFormat::kTiff:
+      return ReadTiffSize(source);
+    case ImageFormat::kUnknown:
+      break;
+  }
+  return std::nullopt;
+}
+
+// Decoders fill a truncated JPEG with gray and only warn, so check the end markers ourselves:
+// a JPEG needs an EOI after the start of its first scan, a PNG its IEND chunk.
+bool LooksComplete(ImageFormat format, std::string_view data) {
+  if (format == ImageFormat::kPng) return data.rfind("IEND") != std::string_view::npos;
+  if (format == ImageFormat::kJpeg) {
+    MemoryByteSource source(data);
+    uint64_t scan_offset = 0;
+    if (!WalkJpeg(source, &scan_offset) || scan_offset == 0) return false;
+    const size_t end = data.rfind("\xff\xd9");
+    return end != std::string_view::npos && end > scan_offset;
+  }
+  return true;
+}
+
+const char* FormatName(ImageFormat format) {
+  switch (format) {
+    case ImageFormat::kPng:
+      return "PNG";
+    case ImageFormat::kJpeg:
+      return "JPEG";
+    case ImageFormat::kTiff:
+      return "TIFF";
+    case ImageFormat::kBmp:
+      return "BMP";
+    case ImageFormat::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+[[noreturn]] void Fail(const std::filesystem::path& path, const std::string& reason) {
+  throw InputError(path.string() + ": " + reason);
+}
+
+// Any depth and channel count the decoders produce, to 8-bit BGR plus 8-bit gray.
+Bitmap ToBitmap(const std::filesystem::path& path, const cv::Mat& decoded) {
+  cv::Mat image8;
+  switch (decoded.depth()) {
+    case CV_8U:
+      image8 = decoded;
+      break;
+    case CV_16U:
+      decoded.convertTo(image8, CV_8U, 1.0 / 257.0);
+      break;
+    case CV_32F:  // Float TIFFs hold intensities in [0, 1].
+      decoded.convertTo(image8, CV_8U, 255.0);
+      break;
+    default:
+      Fail(path, "unsupported pixel depth " + std::to_string(decoded.depth()));
+  }
+  Bitmap bitmap;
+  switch (image8.channels()) {
+    case 1:
+      bitmap.gray = image8;
+      cv::cvtColor(bitmap.gray, bitmap.color, cv::COLOR_GRAY2BGR);
+      return bitmap;
+    case 2:  // Gray plus alpha: drop alpha.
+      cv::extractChannel(image8, bitmap.gray, 0);
+      cv::cvtColor(bitmap.gray, bitmap.color, cv::COLOR_GRAY2BGR);
+      return bitmap;
+    case 3:
+      bitmap.color = image8;
+      break;
+    case 4:  // Alpha is dropped, not composited: SfM only needs the intensities.
+      cv::cvtColor(image8, bitmap.color, cv::COLOR_BGRA2BGR);
+      break;
+    default:
+      Fail(path, "unsupported channel count " + std::to_string(image8.channels()));
+  }
+  cv::cvtColor(bitmap.color, bitmap.gray, cv::COLOR_BGR2GRAY);
+  return bitmap;
+}
+
+}  // namespace
+
+void ImageReaderOptions::Check() const { PARALLAX_CHECK_GT(max_image_pixels, 0); }
+
+ImageFormat DetectImageFormat(const std::filesystem::path& path) {
+  FileByteSource source(path);
+  if (!source.IsOpen()) return ImageFormat::kUnknown;
+  return DetectFormat(source);
+}
+
+std::optional<ImageSize> ReadImageSize(const std::filesystem::path& path) {
+  FileByteSource source(path);
+  if (!source.IsOpen()) return std::nullopt;
+  return ReadSize(DetectFormat(source), source);
+}
+
+Bitmap ReadBitmap(const std::filesystem::path& path, const ImageReaderOptions& options) {
+  options.Check();
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) Fail(path, "not a readable file");
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) Fail(path, "cannot open for reading");
+  const auto file_size = std::filesystem::file_size(path, error);
+  if (error) Fail(path, "cannot read the file size");
+  if (file_size == 0) Fail(path, "empty file");
+  if (file_size > static_cast<uintmax_t>(INT32_MAX)) Fail(path, "file larger than 2 GiB");
+  std::string data(file_size, '\0');
+  stream.read(data.data(), static_cast<std::streamsize>(file_size));
+  if (stream.gcount() != static_cast<std::streamsize>(file_size)) Fail(path, "read failed");
+
+  MemoryByteSource source(data);
+  const ImageFormat format = DetectFormat(source);
+  if (format == ImageFormat::kUnknown) Fail(path, "not a PNG, JPEG, TIFF or BMP image");
+  const std::optional<ImageSize> size = ReadSize(format, source);
+  if (!size) Fail(path, std::string("malformed or truncated ") + FormatName(format) + " header");
+  const int64_t num_pixels = int64_t{size->width} * size->height;
+  if (num_pixels > options.max_image_pixels) {
+    Fail(path, "image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
+                   " pixels, more than max_image_pixels = " +
+                   std::to_string(options.max_image_pixels));
+  }
+  if (!LooksComplete(format, data)) Fail(path, std::string("truncated ") + FormatName(format));
+
+  cv::Mat decoded;
+  try {
+    const cv::Mat buffer(1, static_cast<int>(data.size()), CV_8UC1, data.data());
+    decoded = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& exception) {
+    Fail(path, std::string("cannot decode ") + FormatName(format) + ": " + exception.what());
+  }
+  if (decoded.empty()) Fail(path, std::string("cannot decode ") + FormatName(format));
+  if (decoded.cols != size->width || decoded.rows != size->height) {
+    Fail(path, "decoded size " + std::to_string(decoded.cols) + "x" +
+                   std::to_string(decoded.rows) + " differs from the header's " +
+                   std::to_string(size->width) + "x" + std::to_string(size->height));
+  }
+  return ToBitmap(path, decoded);
+}
+
+std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& dir) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(dir, error)) {
+    throw InputError(dir.string() + ": not a directory");
+  }
+  std::vector<std::filesystem::path> paths;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+    std::error_code entry_error;
+    if (!entry.is_regular_file(entry_error)) continue;
+    if (DetectImageFormat(entry.path()) != ImageFormat::kUnknown) paths.push_back(entry.path());
+  }
+  if (error) throw InputError(dir.string() + ": cannot list: " + error.message());
+  std::sort(paths.begin(), paths.end(), [](const auto& a, const auto& b) {
+    return a.filename().string() < b.filename().string();
+  });
+  return paths;
+}
+
+}  // namespace parallax

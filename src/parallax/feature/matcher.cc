@@ -1,0 +1,213 @@
+#include "parallax/feature/matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
+#include "parallax/util/check.h"
+#include "parallax/util/threading.h"
+
+namespace parallax {
+namespace {
+
+using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+constexpr float kMinusInfinity = -std::numeric_limits<float>::infinity();
+
+// Tiles of the similarity matrix: one task owns up to kMaxRowBlock descriptors of image 1 and
+// walks image 2 in chunks of kColBlock, so a kColBlock x kMaxRowBlock tile (256 KiB) stays in
+// L2 between the product that writes it and the scans that read it.
+constexpr int kMaxRowBlock = 256;
+constexpr int kMinRowBlock = 32;
+constexpr int kColBlock = 256;
+
+// Best and second-best similarity (dot product) per descriptor of image 1 and the index of the
+// best; the largest dot product is the smallest distance for unit vectors.
+struct BestTwo {
+  std::vector<float> best;
+  std::vector<float> second;
+  std::vector<int> best_index;
+};
+
+// The maximum of row[0, n) and the first index where it occurs (n > 0). Eight lanes keep
+// their first maximum; across lanes the smallest index wins a tie, so the result is what a
+// sequential scan finds.
+void RowMax(const float* row, int n, float* max_value, int* max_index) {
+  constexpr int kLanes = 8;
+  float lane_best[kLanes];
+  int lane_index[kLanes];
+  int i = 0;
+#if defined(__AVX2__)
+  // gcc does not vectorise the arg-max; AVX2 does 8 compares and 2 blends per step.
+  __m256 best = _mm256_set1_ps(kMinusInfinity);
+  __m256i best_index = _mm256_set1_epi32(-1);
+  __m256i index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i step = _mm256_set1_epi32(kLanes);
+  for (; i + kLanes <= n; i += kLanes) {
+    const __m256 value = _mm256_loadu_ps(row + i);
+    const __m256 above = _mm256_cmp_ps(value, best, _CMP_GT_OQ);
+    best = _mm256_blendv_ps(best, value, above);
+    best_index = _mm256_blendv_epi8(best_index, index, _mm256_castps_si256(above));
+    index = _mm256_add_epi32(index, step);
+  }
+  _mm256_storeu_ps(lane_best, best);
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_index), best_index);
+#else
+  std::fill_n(lane_best, kLanes, kMinusInfinity);
+  std::fill_n(lane_index, kLanes, -1);
+#endif
+  for (; i < n; ++i) {
+    const int lane = i % kLanes;
+    if (row[i] > lane_best[lane]) {
+      lane_best[lane] = row[i];
+      lane_index[lane] = i;
+    }
+  }
+  *max_value = kMinusInfinity;
+  *max_index = -1;
+  for (int lane = 0; lane < kLanes; ++lane) {
+    if (lane_index[lane] < 0) continue;
+    if (*max_index < 0 || lane_best[lane] > *max_value ||
+        (lane_best[lane] == *max_value && lane_index[lane] < *max_index)) {
+      *max_value = lane_best[lane];
+      *max_index = lane_index[lane];
+    }
+  }
+}
+
+// tile(j, i) = descriptors2[c0 + j] . descriptors1[r0 + i]. Columns i are contiguous, so the
+// running top-2 per i is an element-wise update over each row (vectorises), and the best i
+// per j (the cross-check) is a reduction along the row.
+void ScanTile(const float* tile, int num_rows, int num_cols, int c0, float* best, float* second,
+              int* best_index, float* col_best, int* col_best_index, int r0) {
+  for (int j = 0; j < num_rows; ++j) {
+    const float* row = tile + static_cast<ptrdiff_t>(j) * num_cols;
+    const int index2 = c0 + j;
+    for (int i = 0; i < num_cols; ++i) {
+      const float value = row[i];
+      const bool above_best = value > best[i];
+      const bool above_second = value > second[i];
+      second[i] = above_best ? best[i] : (above_second ? value : second[i]);
+      best[i] = above_best ? value : best[i];
+      best_index[i] = above_best ? index2 : best_index[i];
+    }
+    if (col_best == nullptr) continue;
+    float lanes_max;
+    int first;
+    RowMax(row, num_cols, &lanes_max, &first);
+    float value = col_best[j];
+    int index = col_best_index[j];
+    if (first >= 0 && lanes_max > value) {
+      value = lanes_max;
+      index = r0 + first;
+    }
+    col_best[j] = value;
+    col_best_index[j] = index;
+  }
+}
+
+}  // namespace
+
+void FeatureMatchingOptions::Check() const {
+  PARALLAX_CHECK_GT(max_ratio, 0.0);
+  PARALLAX_CHECK_LE(max_ratio, 1.0);
+  PARALLAX_CHECK_GT(max_distance, 0.0);
+  PARALLAX_CHECK(num_threads == -1 || num_threads > 0);
+}
+
+MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors) {
+  MatchableDescriptors matchable;
+  matchable.values = descriptors.cast<float>();
+  for (Eigen::Index row = 0; row < matchable.values.rows(); ++row) {
+    const float norm = matchable.values.row(row).norm();
+    // An all-zero row stays zero: distance sqrt(2) to everything, so it never matches.
+    if (norm > 0.0f) matchable.values.row(row) /= norm;
+  }
+  return matchable;
+}
+
+FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
+                                const MatchableDescriptors& descriptors2,
+                                const FeatureMatchingOptions& options) {
+  options.Check();
+  const RowMatrixXf& values1 = descriptors1.values;
+  const RowMatrixXf& values2 = descriptors2.values;
+  const int num1 = static_cast<int>(values1.rows());
+  const int num2 = static_cast<int>(values2.rows());
+  if (num1 == 0 || num2 == 0) return {};
+  PARALLAX_CHECK_EQ(values1.cols(), values2.cols());
+
+  // Enough row blocks to keep every thread busy, but not so small that the product is
+  // dominated by packing the image-2 chunks.
+  const int num_threads = EffectiveNumThreads(options.num_threads);
+  int row_block = (num1 + 4 * num_threads - 1) / (4 * num_threads);
+  row_block = std::clamp((row_block + 7) / 8 * 8, kMinRowBlock, kMaxRowBlock);
+  const int num_row_blocks = (num1 + row_block - 1) / row_block;
+
+  BestTwo rows;
+  rows.best.assign(num1, kMinusInfinity);
+  rows.second.assign(num1, kMinusInfinity);
+  rows.best_index.assign(num1, -1);
+  // Best row of each column, per row block (merged in block order below).
+  std::vector<float> col_best;
+  std::vector<int> col_best_index;
+  if (options.cross_check) {
+    col_best.assign(static_cast<size_t>(num_row_blocks) * num2, kMinusInfinity);
+    col_best_index.assign(static_cast<size_t>(num_row_blocks) * num2, -1);
+  }
+
+  ParallelFor(0, num_row_blocks, num_threads, [&](size_t block) {
+    const int r0 = static_cast<int>(block) * row_block;
+    const int num_rows1 = std::min(row_block, num1 - r0);
+    RowMatrixXf tile(kColBlock, num_rows1);
+    const auto block1 = values1.middleRows(r0, num_rows1);
+    for (int c0 = 0; c0 < num2; c0 += kColBlock) {
+      const int num_rows2 = std::min(kColBlock, num2 - c0);
+      Eigen::Map<RowMatrixXf> similarities(tile.data(), num_rows2, num_rows1);
+      similarities.noalias() = values2.middleRows(c0, num_rows2) * block1.transpose();
+      const size_t col_offset = block * static_cast<size_t>(num2) + c0;
+      ScanTile(tile.data(), num_rows2, num_rows1, c0, rows.best.data() + r0,
+               rows.second.data() + r0, rows.best_index.data() + r0,
+               options.cross_check ? col_best.data() + col_offset : nullptr,
+               options.cross_check ? col_best_index.data() + col_offset : nullptr, r0);
+    }
+  });
+
+  std::vector<int> best_row_of_col;
+  if (options.cross_check) {
+    best_row_of_col.assign(num2, -1);
+    for (int j = 0; j < num2; ++j) {
+      float best = kMinusInfinity;
+      for (int block = 0; block < num_row_blocks; ++block) {
+        const size_t k = static_cast<size_t>(block) * num2 + j;
+        if (col_best_index[k] >= 0 && (best_row_of_col[j] < 0 || col_best[k] > best)) {
+          best = col_best[k];
+          best_row_of_col[j] = col_best_index[k];
+        }
+      }
+    }
+  }
+
+  // ||a - b||^2 = 2 - 2 a.b; the square roots are taken once per row, at the end. A missing
+  // second neighbour (one descriptor in image 2) has similarity -inf, i.e. infinite distance.
+  const float max_ratio = static_cast<float>(options.max_ratio);
+  const float max_distance = static_cast<float>(options.max_distance);
+  FeatureMatches matches;
+  for (int i = 0; i < num1; ++i) {
+    const int j = rows.best_index[i];
+    if (j < 0) continue;
+    const float distance1 = std::sqrt(std::max(0.0f, 2.0f - 2.0f * rows.best[i]));
+    const float distance2 = std::sqrt(std::max(0.0f, 2.0f - 2.0f * rows.second[i]));
+    if (distance1 > max_distance) continue;
+    if (!(distance1 < max_ratio * distance2)) continue;
+    if (options.cross_check && best_row_of_col[j] != i) continue;
+    matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(j)});
+  }
+  return matches;
+}
+
+}  // namespace parallax
