@@ -5,5 +5,13 @@
 namespace parallax::cli {
 
 int RunVersion(int argc, char** argv);
+int RunCalibrate(int argc, char** argv);
+int RunFeatures(int argc, char** argv);
+int RunMatch(int argc, char** argv);
+int RunMapper(int argc, char** argv);
+int RunReconstruct(int argc, char** argv);
+int RunSynth(int argc, char** argv);
+int RunEvaluate(int argc, char** argv);
+int RunReport(int argc, char** argv);
 
 }  // namespace parallax::cli

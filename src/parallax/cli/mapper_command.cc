@@ -1,0 +1,48 @@
+#include <iostream>
+
+#include "parallax/cli/cli_common.h"
+#include "parallax/cli/commands.h"
+#include "parallax/cli/mapper_options_cli.h"
+#include "parallax/math/random.h"
+#include "parallax/pipeline/run_summary.h"
+#include "parallax/util/check.h"
+#include "parallax/util/file.h"
+#include "parallax/util/timer.h"
+
+namespace parallax::cli {
+
+int RunMapper(int argc, char** argv) {
+  CLI::App app("Run the incremental mapper on an existing database (Parallax's or COLMAP's)",
+               "parallax mapper");
+  std::string database_path, image_path, output;
+  uint64_t seed = 0;
+  MappingStageOptions options;
+  app.add_option("--database", database_path, "Feature and match database")->required();
+  app.add_option("--image-path", image_path, "Folder of the images (for point colours)")->required();
+  app.add_option("--output", output, "Output folder (sparse/<k>/, points.ply, summary.json)")
+      ->required();
+  app.add_option("--seed", seed, "Random seed")->capture_default_str();
+  AddMapperOptions(app, &options);
+  VerbosityFlags flags;
+  AddVerbosityFlags(app, &flags);
+  return RunCommand(app, argc, argv, flags, [&] {
+    SetPRNGSeed(seed);
+    if (!std::filesystem::exists(database_path)) {
+      throw InputError(database_path + ": database does not exist");
+    }
+    Database database(database_path);
+    CreateDirectoryOrThrow(output);
+    Timer timer;
+    MappingStageResult result = RunMappingStage(options, database, image_path, output);
+    const StageTimings timings = {{"mapping", timer.ElapsedSeconds()}};
+    PrintMappingResult(result, output);
+    if (result.models.empty()) {
+      std::cerr << "error: no model could be started: " << result.summary.failure << std::endl;
+      return 1;
+    }
+    WriteRunSummary(BuildRunSummary(result, timings), std::filesystem::path(output) / "summary.json");
+    return 0;
+  });
+}
+
+}  // namespace parallax::cli

@@ -1,0 +1,54 @@
+#include "parallax/cli/mapper_options_cli.h"
+
+#include <iostream>
+
+#include "parallax/pipeline/run_summary.h"
+
+namespace parallax::cli {
+
+void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
+  IncrementalMapperOptions& mapper = options->mapper;
+  app.add_option("--init-min-inliers", mapper.init_min_num_inliers,
+                 "Points the initial pair must triangulate")
+      ->capture_default_str();
+  app.add_option("--init-min-tri-angle", mapper.init_min_tri_angle_deg,
+                 "Median triangulation angle of the initial pair, degrees")
+      ->capture_default_str();
+  app.add_option("--abs-pose-min-inliers", mapper.abs_pose_min_num_inliers,
+                 "PnP inliers an image needs to be registered")
+      ->capture_default_str();
+  app.add_option("--abs-pose-max-error", mapper.abs_pose.max_error_px,
+                 "PnP RANSAC threshold, pixels")
+      ->capture_default_str();
+  app.add_option("--filter-max-error", mapper.filter.max_reproj_error_px,
+                 "Observations reprojecting further are removed, pixels")
+      ->capture_default_str();
+  app.add_option("--min-tri-angle", mapper.triangulation.min_angle_deg,
+                 "Smallest triangulation angle of a point, degrees")
+      ->capture_default_str();
+  app.add_flag("!--no-multiple-models", mapper.multiple_models,
+               "Stop after the first model instead of starting new ones");
+  app.add_flag("!--no-refine-intrinsics", mapper.refine_focal_length,
+               "Keep focal lengths fixed even for cameras without a prior");
+  app.add_option("--ba-threads", mapper.bundle_adjustment.num_threads,
+                 "Threads for bundle adjustment (-1: all)")
+      ->capture_default_str();
+  app.add_flag("!--no-text", options->write_text, "Do not write the .txt model files");
+  app.add_flag("!--no-binary", options->write_binary, "Do not write the .bin model files");
+}
+
+void PrintMappingResult(const MappingStageResult& result, const std::filesystem::path& output_dir) {
+  for (const std::string& line : UnregisteredImageLines(result)) std::cout << line << "\n";
+  if (result.models.empty()) return;
+  for (size_t index = 0; index < result.models.size(); ++index) {
+    const Reconstruction& model = result.models[index];
+    Reconstruction copy = model;
+    std::cout << "model " << index << ": " << model.NumRegImages() << "/" << result.image_names.size()
+              << " images registered, " << model.NumPoints3D() << " points, mean track length "
+              << model.ComputeMeanTrackLength() << ", mean reprojection error "
+              << copy.UpdatePointErrors() << " px -> " << (output_dir / "sparse" / std::to_string(index)).string()
+              << "\n";
+  }
+}
+
+}  // namespace parallax::cli

@@ -1,0 +1,88 @@
+#include "parallax/pipeline/mapping_stage.h"
+
+#include "parallax/feature/image_reader.h"
+#include "parallax/scene/colmap_io.h"
+#include "parallax/util/check.h"
+#include "parallax/util/file.h"
+#include "parallax/util/logging.h"
+#include "parallax/util/timer.h"
+
+namespace parallax {
+
+void MappingStageOptions::Check() const {
+  input.Check();
+  mapper.Check();
+  PARALLAX_CHECK_MSG(write_text || write_binary, "at least one model format must be written");
+}
+
+void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reconstruction) {
+  std::map<point3D_t, Eigen::Vector3d> color_sums;
+  std::map<point3D_t, int> color_counts;
+  for (const image_t image_id : reconstruction->RegImageIds()) {
+    const Image& image = reconstruction->GetImage(image_id);
+    Bitmap bitmap;
+    try {
+      bitmap = ReadBitmap(image_dir / image.name);
+    } catch (const std::exception& error) {
+      PARALLAX_LOG(Warning) << "colours: " << error.what();
+      continue;
+    }
+    for (const Point2D& point2D : image.points2D) {
+      if (!point2D.HasPoint3D()) continue;
+      // Keypoints use pixel centres at +0.5.
+      const int x = static_cast<int>(point2D.xy.x());
+      const int y = static_cast<int>(point2D.xy.y());
+      if (x < 0 || y < 0 || x >= bitmap.color.cols || y >= bitmap.color.rows) continue;
+      const cv::Vec3b bgr = bitmap.color.at<cv::Vec3b>(y, x);
+      color_sums[point2D.point3D_id] += Eigen::Vector3d(bgr[2], bgr[1], bgr[0]);
+      ++color_counts[point2D.point3D_id];
+    }
+  }
+  for (const auto& [point3D_id, sum] : color_sums) {
+    const Eigen::Vector3d mean = sum / color_counts[point3D_id];
+    reconstruction->GetPoint3D(point3D_id).color = mean.array().round().cast<uint8_t>();
+  }
+}
+
+void WriteModels(const std::vector<Reconstruction>& models, const std::filesystem::path& output_dir,
+                 bool write_text, bool write_binary) {
+  for (size_t index = 0; index < models.size(); ++index) {
+    const std::filesystem::path dir = output_dir / "sparse" / std::to_string(index);
+    CreateDirectoryOrThrow(dir);
+    if (write_binary) WriteReconstructionBinary(models[index], dir);
+    if (write_text) WriteReconstructionText(models[index], dir);
+  }
+  if (!models.empty()) WritePointsPly(models.front(), output_dir / "points.ply");
+}
+
+MappingStageResult RunMappingStage(const MappingStageOptions& options, const Database& database,
+                                   const std::filesystem::path& image_dir,
+                                   const std::filesystem::path& output_dir) {
+  options.Check();
+  MappingStageResult result;
+  Timer timer;
+  const MapperInput input = LoadMapperInput(database, options.input);
+  for (const auto& [image_id, image] : input.images) {
+    result.image_names[image_id] = image.name;
+    result.num_keypoints[image_id] = image.points2D.size();
+  }
+  const auto& track_stats = input.correspondence_graph.Stats();
+  PARALLAX_LOG(Info) << "mapper: " << input.images.size() << " images, "
+                     << input.two_view_geometries.size() << " verified pairs, "
+                     << track_stats.num_tracks << " tracks (mean length "
+                     << track_stats.mean_track_length << ", " << track_stats.num_split_components
+                     << " inconsistent components split)";
+  result.load_seconds = timer.ElapsedSeconds();
+
+  IncrementalMapper mapper(options.mapper, input);
+  result.models = mapper.Reconstruct(&result.summary);
+  if (result.models.empty()) return result;
+
+  timer.Restart();
+  for (Reconstruction& model : result.models) ColorizePoints(image_dir, &model);
+  WriteModels(result.models, output_dir, options.write_text, options.write_binary);
+  result.write_seconds = timer.ElapsedSeconds();
+  return result;
+}
+
+}  // namespace parallax

@@ -1,0 +1,101 @@
+#include "parallax/pipeline/run_summary.h"
+
+#include <cmath>
+
+#include "parallax/util/file.h"
+
+namespace parallax {
+
+namespace {
+nlohmann::json NumberOrNull(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+}  // namespace
+
+nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimings& timings) {
+  nlohmann::json summary;
+  const Reconstruction* model = result.models.empty() ? nullptr : &result.models.front();
+  size_t num_registered = 0;
+  for (const auto& [image_id, report] : result.summary.images) {
+    if (report.model_index >= 0) ++num_registered;
+  }
+  summary["images_total"] = result.image_names.size();
+  summary["images_registered"] = num_registered;
+  summary["images_registered_largest_model"] = model ? model->NumRegImages() : 0;
+  summary["points3D"] = model ? model->NumPoints3D() : 0;
+  summary["observations"] = model ? model->NumObservations() : 0;
+  summary["mean_track_length"] = model ? model->ComputeMeanTrackLength() : 0.0;
+  double mean_error = 0;
+  if (model) {
+    Reconstruction copy = *model;
+    mean_error = copy.UpdatePointErrors();
+  }
+  summary["mean_reprojection_error_px"] = mean_error;
+  if (!result.summary.failure.empty()) summary["failure"] = result.summary.failure;
+
+  nlohmann::json stage_times = nlohmann::json::object();
+  double total = 0;
+  for (const auto& [stage, seconds] : timings) {
+    stage_times[stage] = seconds;
+    total += seconds;
+  }
+  stage_times["total"] = total;
+  summary["timings_s"] = stage_times;
+  summary["mapper"] = {{"local_bundle_adjustments", result.summary.num_local_ba},
+                       {"global_bundle_adjustments", result.summary.num_global_ba},
+                       {"bundle_adjustment_s", result.summary.ba_seconds}};
+
+  nlohmann::json images = nlohmann::json::array();
+  for (const auto& [image_id, name] : result.image_names) {
+    nlohmann::json entry;
+    entry["image_id"] = image_id;
+    entry["name"] = name;
+    const auto keypoints = result.num_keypoints.find(image_id);
+    entry["num_keypoints"] = keypoints == result.num_keypoints.end() ? 0 : keypoints->second;
+    const auto it = result.summary.images.find(image_id);
+    const MapperImageReport report = it == result.summary.images.end() ? MapperImageReport() : it->second;
+    entry["registered"] = report.model_index >= 0;
+    entry["model"] = report.model_index;
+    size_t num_observations = 0;
+    if (report.model_index >= 0) {
+      num_observations = result.models[report.model_index].GetImage(image_id).num_points3D;
+    }
+    entry["num_observations"] = num_observations;
+    entry["reprojection_error_before_ba_px"] = NumberOrNull(report.error_before_ba_px);
+    entry["reprojection_error_after_ba_px"] = NumberOrNull(report.error_after_ba_px);
+    if (report.model_index < 0) {
+      entry["reason"] = report.reason;
+      entry["registration_attempts"] = report.num_registration_trials;
+      entry["visible_points_at_last_attempt"] = report.num_visible_points;
+      entry["pnp_inliers_at_last_attempt"] = report.num_pnp_inliers;
+    }
+    images.push_back(entry);
+  }
+  summary["images"] = images;
+
+  nlohmann::json models = nlohmann::json::array();
+  for (size_t index = 0; index < result.models.size(); ++index) {
+    models.push_back({{"path", "sparse/" + std::to_string(index)},
+                      {"images_registered", result.models[index].NumRegImages()},
+                      {"points3D", result.models[index].NumPoints3D()}});
+  }
+  summary["models"] = models;
+  return summary;
+}
+
+void WriteRunSummary(const nlohmann::json& summary, const std::filesystem::path& path) {
+  WriteTextFileAtomically(path, summary.dump(2) + "\n");
+}
+
+std::vector<std::string> UnregisteredImageLines(const MappingStageResult& result) {
+  std::vector<std::string> lines;
+  for (const auto& [image_id, report] : result.summary.images) {
+    if (report.model_index >= 0) continue;
+    const auto name = result.image_names.find(image_id);
+    lines.push_back((name == result.image_names.end() ? std::to_string(image_id) : name->second) +
+                    ": not registered: " + report.reason);
+  }
+  return lines;
+}
+
+}  // namespace parallax

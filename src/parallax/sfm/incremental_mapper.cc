@@ -1,0 +1,472 @@
+#include "parallax/sfm/incremental_mapper.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "parallax/geometry/essential_matrix.h"
+#include "parallax/geometry/triangulation.h"
+#include "parallax/sfm/next_view.h"
+#include "parallax/sfm/tracked_reconstruction.h"
+#include "parallax/util/check.h"
+#include "parallax/util/logging.h"
+#include "parallax/util/timer.h"
+
+namespace parallax {
+
+void IncrementalMapperOptions::Check() const {
+  PARALLAX_CHECK_GE(init_min_num_inliers, 1);
+  PARALLAX_CHECK_GE(init_min_tri_angle_deg, 0.0);
+  PARALLAX_CHECK_GE(init_max_trials, 1);
+  abs_pose.Check();
+  abs_pose_refinement.Check();
+  PARALLAX_CHECK_GE(abs_pose_min_num_inliers, 3);
+  PARALLAX_CHECK(abs_pose_min_inlier_ratio >= 0 && abs_pose_min_inlier_ratio <= 1);
+  PARALLAX_CHECK_GE(max_registration_trials, 1);
+  triangulation.Check();
+  filter.Check();
+  bundle_adjustment.Check();
+  PARALLAX_CHECK_GE(local_ba_num_images, 2);
+  PARALLAX_CHECK_GE(global_ba_images_ratio, 1.0);
+  PARALLAX_CHECK_GE(global_ba_points_ratio, 1.0);
+  PARALLAX_CHECK_GE(global_ba_max_refinements, 1);
+  PARALLAX_CHECK_GE(min_model_size, 2);
+  PARALLAX_CHECK_GE(max_num_models, 1);
+}
+
+Reconstruction ExtractRegisteredModel(const Reconstruction& reconstruction) {
+  Reconstruction model;
+  std::set<camera_t> camera_ids;
+  for (const auto& [image_id, image] : reconstruction.Images()) {
+    if (image.registered) camera_ids.insert(image.camera_id);
+  }
+  for (camera_t camera_id : camera_ids) model.AddCamera(reconstruction.GetCamera(camera_id));
+  for (const auto& [image_id, image] : reconstruction.Images()) {
+    if (!image.registered) continue;
+    Image copy = image;
+    for (Point2D& point : copy.points2D) point.point3D_id = kInvalidPoint3DId;
+    model.AddImage(std::move(copy));
+    model.RegisterImage(image_id);
+  }
+  for (const auto& [point3D_id, point] : reconstruction.Points3D()) {
+    model.AddPoint3DWithId(point3D_id, point);
+  }
+  return model;
+}
+
+// Builds one model from the images not used by earlier models.
+class IncrementalMapper::ModelBuilder {
+ public:
+  ModelBuilder(const IncrementalMapperOptions& options, const MapperInput& input,
+               const std::set<image_t>& used_images, MapperSummary* summary)
+      : options_(options), input_(input), used_images_(used_images), summary_(summary),
+        model_(input.correspondence_graph, &reconstruction_) {
+    for (const auto& [camera_id, camera] : input.cameras) reconstruction_.AddCamera(camera);
+    for (const auto& [image_id, image] : input.images) reconstruction_.AddImage(image);
+  }
+
+  Reconstruction& Model() { return reconstruction_; }
+
+  // Finds an initial pair with enough points and triangulation angle, trying stricter angle
+  // thresholds first. False when no pair qualifies.
+  bool Initialize() {
+    std::vector<std::pair<image_pair_t, const TwoViewGeometry*>> candidates;
+    for (const auto& [pair_id, geometry] : input_.two_view_geometries) {
+      const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
+      if (used_images_.count(image_id1) || used_images_.count(image_id2)) continue;
+      if (geometry.config == TwoViewGeometry::kPanoramic) continue;
+      if (static_cast<int>(geometry.inlier_matches.size()) < options_.init_min_num_inliers) continue;
+      candidates.emplace_back(pair_id, &geometry);
+    }
+    std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
+      return a.second->inlier_matches.size() > b.second->inlier_matches.size();
+    });
+    for (const double angle_factor : {1.0, 0.5, 0.25}) {
+      const double min_angle_deg = options_.init_min_tri_angle_deg * angle_factor;
+      int trials = 0;
+      for (const auto& [pair_id, geometry] : candidates) {
+        if (trials++ >= options_.init_max_trials) break;
+        if (TryInitialPair(pair_id, *geometry, min_angle_deg)) return true;
+      }
+    }
+    return false;
+  }
+
+  // Registers images until none can be added, with bundle adjustment along the way.
+  void Grow() {
+    std::map<image_t, int> trials;
+    while (true) {
+      bool registered_any = false;
+      for (const image_t image_id : RankCandidates(trials)) {
+        MapperImageReport& report = summary_->images[image_id];
+        ++report.num_registration_trials;
+        ++trials[image_id];
+        if (RegisterImage(image_id, &report)) {
+          registered_any = true;
+          AdjustAfterRegistration(image_id);
+          break;
+        }
+        PARALLAX_LOG(Debug) << "mapper: image " << image_id << " not registered: " << report.reason;
+      }
+      if (registered_any) continue;
+      // Stuck: one global adjustment and re-triangulation may make room for more images.
+      if (reconstruction_.NumRegImages() != images_at_last_global_ba_ ||
+          reconstruction_.NumPoints3D() != points_at_last_global_ba_) {
+        GlobalBundleAdjust();
+        trials.clear();
+        if (!RankCandidates(trials).empty()) continue;
+      }
+      break;
+    }
+    GlobalBundleAdjust();
+  }
+
+ private:
+  bool Available(image_t image_id) const { return !used_images_.count(image_id); }
+
+  bool TryInitialPair(image_pair_t pair_id, const TwoViewGeometry& geometry, double min_angle_deg) {
+    const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
+    const Image& image1 = reconstruction_.GetImage(image_id1);
+    const Image& image2 = reconstruction_.GetImage(image_id2);
+    const Camera& camera1 = reconstruction_.GetCamera(image1.camera_id);
+    const Camera& camera2 = reconstruction_.GetCamera(image2.camera_id);
+
+    std::vector<Eigen::Vector2d> points1, points2;
+    for (const FeatureMatch& match : geometry.inlier_matches) {
+      points1.push_back(camera1.CamFromImg(image1.points2D[match.point2D_idx1].xy));
+      points2.push_back(camera2.CamFromImg(image2.points2D[match.point2D_idx2].xy));
+    }
+    Eigen::Matrix3d E = geometry.E;
+    if (geometry.config != TwoViewGeometry::kCalibrated || E.isZero()) {
+      E = EssentialFromFundamental(geometry.F, camera1.CalibrationMatrix(),
+                                   camera2.CalibrationMatrix());
+    }
+    Rigid3d cam2_from_cam1;
+    if (!E.allFinite() || !PoseFromEssentialMatrix(E, points1, points2, &cam2_from_cam1)) {
+      return false;
+    }
+
+    // Count the matches that triangulate well under this pose.
+    const Matrix3x4d proj1 = Rigid3d().ToMatrix();
+    const Matrix3x4d proj2 = cam2_from_cam1.ToMatrix();
+    const Eigen::Vector3d center2 = ProjectionCenter(cam2_from_cam1);
+    const double max_error = options_.triangulation.max_reproj_error_px;
+    std::vector<double> angles;
+    for (size_t i = 0; i < points1.size(); ++i) {
+      const auto xyz = TriangulatePoint(proj1, proj2, points1[i], points2[i]);
+      if (!xyz || xyz->z() <= 0 || (cam2_from_cam1 * *xyz).z() <= 0) continue;
+      const FeatureMatch& match = geometry.inlier_matches[i];
+      const double error1 = (camera1.ImgFromCam(*xyz) - image1.points2D[match.point2D_idx1].xy).norm();
+      const double error2 =
+          (camera2.ImgFromCam(cam2_from_cam1 * *xyz) - image2.points2D[match.point2D_idx2].xy).norm();
+      if (error1 > max_error || error2 > max_error) continue;
+      angles.push_back(CalculateTriangulationAngle(Eigen::Vector3d::Zero(), center2, *xyz));
+    }
+    if (static_cast<int>(angles.size()) < options_.init_min_num_inliers) return false;
+    std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+    const double median_angle_deg = angles[angles.size() / 2] * 180.0 / M_PI;
+    if (median_angle_deg < min_angle_deg) return false;
+
+    reconstruction_.GetImage(image_id1).cam_from_world = Rigid3d();
+    reconstruction_.GetImage(image_id2).cam_from_world = cam2_from_cam1;
+    reconstruction_.RegisterImage(image_id1);
+    reconstruction_.RegisterImage(image_id2);
+    init_image_id1_ = image_id1;
+    init_image_id2_ = image_id2;
+    TriangulateImage(options_.triangulation, image_id1, &model_);
+    for (const image_t image_id : {image_id1, image_id2}) {
+      summary_->images[image_id].error_before_ba_px =
+          reconstruction_.MeanReprojectionErrorOfImage(image_id);
+    }
+    GlobalBundleAdjust();
+    if (static_cast<int>(reconstruction_.NumPoints3D()) < options_.init_min_num_inliers / 2) {
+      PARALLAX_LOG(Debug) << "mapper: initial pair " << image_id1 << "-" << image_id2
+                          << " kept too few points after adjustment";
+      reconstruction_.DeRegisterImage(image_id1);
+      reconstruction_.DeRegisterImage(image_id2);
+      return false;
+    }
+    PARALLAX_LOG(Info) << "mapper: initial pair " << image1.name << " + " << image2.name << " ("
+                       << geometry.inlier_matches.size() << " inliers, median angle "
+                       << median_angle_deg << " deg, " << reconstruction_.NumPoints3D()
+                       << " points)";
+    return true;
+  }
+
+  // Unregistered images connected to the model, best first.
+  std::vector<image_t> RankCandidates(const std::map<image_t, int>& trials) const {
+    std::set<image_t> connected;
+    for (const image_t image_id : reconstruction_.RegImageIds()) {
+      for (const auto& [neighbor, count] : input_.correspondence_graph.NeighborsOf(image_id)) {
+        if (!reconstruction_.IsImageRegistered(neighbor) && Available(neighbor)) {
+          connected.insert(neighbor);
+        }
+      }
+    }
+    std::vector<std::pair<double, image_t>> scored;
+    for (const image_t image_id : connected) {
+      const auto it = trials.find(image_id);
+      if (it != trials.end() && it->second >= options_.max_registration_trials) continue;
+      const double score = VisibilityScore(image_id, model_);
+      if (score > 0) scored.emplace_back(score, image_id);
+    }
+    std::stable_sort(scored.begin(), scored.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::vector<image_t> ranked;
+    for (const auto& [score, image_id] : scored) ranked.push_back(image_id);
+    return ranked;
+  }
+
+  bool RegisterImage(image_t image_id, MapperImageReport* report) {
+    Image& image = reconstruction_.GetImage(image_id);
+    const Camera& camera = reconstruction_.GetCamera(image.camera_id);
+    std::vector<Eigen::Vector2d> points2D;
+    std::vector<Eigen::Vector3d> points3D;
+    std::vector<std::pair<point2D_t, point3D_t>> links;
+    for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
+      const track_t track_id = input_.correspondence_graph.TrackOf(image_id, idx);
+      if (track_id == kInvalidTrackId) continue;
+      const point3D_t point3D_id = model_.PointOfTrack(track_id);
+      if (point3D_id == kInvalidPoint3DId) continue;
+      points2D.push_back(image.points2D[idx].xy);
+      points3D.push_back(reconstruction_.GetPoint3D(point3D_id).xyz);
+      links.emplace_back(idx, point3D_id);
+    }
+    report->num_visible_points = points2D.size();
+    const size_t min_inliers = static_cast<size_t>(options_.abs_pose_min_num_inliers);
+    if (points2D.size() < min_inliers) {
+      report->reason = "too few 2D-3D correspondences: " + std::to_string(points2D.size()) +
+                       " (need " + std::to_string(min_inliers) + ")";
+      return false;
+    }
+    const AbsolutePoseReport pose = EstimateAbsolutePose(camera, points2D, points3D, options_.abs_pose);
+    report->num_pnp_inliers = pose.num_inliers;
+    const double inlier_ratio = static_cast<double>(pose.num_inliers) / points2D.size();
+    if (!pose.success || pose.num_inliers < min_inliers ||
+        inlier_ratio < options_.abs_pose_min_inlier_ratio) {
+      report->reason = "PnP inliers below the bar: " + std::to_string(pose.num_inliers) + " of " +
+                       std::to_string(points2D.size()) + " correspondences (need " +
+                       std::to_string(min_inliers) + " and ratio " +
+                       std::to_string(options_.abs_pose_min_inlier_ratio) + ")";
+      return false;
+    }
+    Rigid3d cam_from_world = pose.cam_from_world;
+    Camera refined_camera = camera;
+    if (!RefineAbsolutePose(options_.abs_pose_refinement, pose.inlier_mask, points2D, points3D,
+                            &cam_from_world, &refined_camera)) {
+      report->reason = "pose rejected by non-linear refinement";
+      return false;
+    }
+    image.cam_from_world = cam_from_world;
+    reconstruction_.RegisterImage(image_id);
+    size_t num_added = 0;
+    for (size_t i = 0; i < links.size(); ++i) {
+      if (!pose.inlier_mask[i]) continue;
+      const auto [point2D_idx, point3D_id] = links[i];
+      if (!reconstruction_.ExistsPoint3D(point3D_id)) continue;
+      const double error = ObservationError(reconstruction_, image_id, point2D_idx,
+                                            reconstruction_.GetPoint3D(point3D_id).xyz);
+      if (error <= options_.triangulation.max_reproj_error_px) {
+        reconstruction_.AddObservation(point3D_id, {image_id, point2D_idx});
+        ++num_added;
+      }
+    }
+    if (num_added < min_inliers / 2) {
+      reconstruction_.DeRegisterImage(image_id);
+      report->reason = "pose rejected: only " + std::to_string(num_added) +
+                       " observations fit after refinement";
+      return false;
+    }
+    TriangulateImage(options_.triangulation, image_id, &model_);
+    report->reason.clear();
+    report->error_before_ba_px = reconstruction_.MeanReprojectionErrorOfImage(image_id);
+    PARALLAX_LOG(Debug) << "mapper: registered " << image.name << " (" << pose.num_inliers << "/"
+                        << points2D.size() << " PnP inliers, "
+                        << reconstruction_.NumRegImages() << " images, "
+                        << reconstruction_.NumPoints3D() << " points)";
+    return true;
+  }
+
+  void AdjustAfterRegistration(image_t image_id) {
+    const bool grown =
+        reconstruction_.NumRegImages() >=
+            options_.global_ba_images_ratio * images_at_last_global_ba_ ||
+        reconstruction_.NumPoints3D() >= options_.global_ba_points_ratio * points_at_last_global_ba_;
+    if (grown) {
+      GlobalBundleAdjust();
+    } else {
+      LocalBundleAdjust(image_id);
+    }
+  }
+
+  BundleAdjustmentOptions BaOptions(bool refine_intrinsics) const {
+    BundleAdjustmentOptions ba = options_.bundle_adjustment;
+    ba.refine_focal_length = refine_intrinsics && options_.refine_focal_length;
+    ba.refine_extra_params = refine_intrinsics && options_.refine_extra_params;
+    ba.refine_principal_point = refine_intrinsics && options_.refine_principal_point;
+    return ba;
+  }
+
+  // Cameras with a known focal length stay fixed; others are refined once the model has
+  // enough images to constrain them.
+  void SetCameraConstancy(BundleAdjustmentConfig* config) const {
+    for (const auto& [camera_id, camera] : reconstruction_.Cameras()) {
+      if (camera.has_prior_focal_length || reconstruction_.NumRegImages() < 3) {
+        config->constant_cameras.insert(camera_id);
+      }
+    }
+  }
+
+  void FixGauge(BundleAdjustmentConfig* config) const {
+    config->SetConstantPose(init_image_id1_);
+    const Eigen::Vector3d& t2 = reconstruction_.GetImage(init_image_id2_).cam_from_world.translation;
+    int axis = 0;
+    t2.cwiseAbs().maxCoeff(&axis);
+    config->constant_translation_coordinates.insert({init_image_id2_, axis});
+  }
+
+  void LocalBundleAdjust(image_t image_id) {
+    std::map<image_t, size_t> shared;
+    const Image& image = reconstruction_.GetImage(image_id);
+    std::vector<point3D_t> point3D_ids;
+    for (const Point2D& point2D : image.points2D) {
+      if (!point2D.HasPoint3D()) continue;
+      point3D_ids.push_back(point2D.point3D_id);
+      for (const TrackElement& element : reconstruction_.GetPoint3D(point2D.point3D_id).track.elements) {
+        if (element.image_id != image_id) ++shared[element.image_id];
+      }
+    }
+    std::vector<std::pair<size_t, image_t>> ranked;
+    for (const auto& [other, count] : shared) ranked.emplace_back(count, other);
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    BundleAdjustmentConfig config;
+    config.AddImage(image_id);
+    for (size_t i = 0; i < ranked.size() && static_cast<int>(config.images.size()) <
+                                                 options_.local_ba_num_images; ++i) {
+      config.AddImage(ranked[i].second);
+    }
+    if (config.images.size() == reconstruction_.NumRegImages()) FixGauge(&config);
+    for (const auto& [camera_id, camera] : reconstruction_.Cameras()) {
+      config.constant_cameras.insert(camera_id);
+    }
+    RunBundleAdjustment(BaOptions(false), config);
+    ++summary_->num_local_ba;
+    // Points of the adjusted images may have moved: filter them, then let the new image's
+    // tracks pick up observations that now fit.
+    std::vector<point3D_t> affected;
+    for (const image_t adjusted : config.images) {
+      for (const Point2D& point2D : reconstruction_.GetImage(adjusted).points2D) {
+        if (point2D.HasPoint3D()) affected.push_back(point2D.point3D_id);
+      }
+    }
+    std::sort(affected.begin(), affected.end());
+    affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+    FilterPoints(options_.filter, affected, &reconstruction_);
+    TriangulateImage(options_.triangulation, image_id, &model_);
+  }
+
+  void GlobalBundleAdjust() {
+    const size_t num_observations_before = reconstruction_.NumObservations();
+    for (int round = 0; round < options_.global_ba_max_refinements; ++round) {
+      BundleAdjustmentConfig config;
+      for (const image_t image_id : reconstruction_.RegImageIds()) config.AddImage(image_id);
+      FixGauge(&config);
+      SetCameraConstancy(&config);
+      RunBundleAdjustment(BaOptions(true), config);
+      ++summary_->num_global_ba;
+      const size_t num_filtered = FilterAllPoints(options_.filter, &reconstruction_);
+      const size_t num_completed = CompleteAllTracks(options_.triangulation, &model_);
+      const size_t num_observations = std::max<size_t>(1, reconstruction_.NumObservations());
+      // Stop refining once the model barely changes.
+      if (static_cast<double>(num_filtered + num_completed) / num_observations < 0.001) break;
+    }
+    images_at_last_global_ba_ = reconstruction_.NumRegImages();
+    points_at_last_global_ba_ = reconstruction_.NumPoints3D();
+    PARALLAX_LOG(Debug) << "mapper: global BA on " << images_at_last_global_ba_ << " images, "
+                        << points_at_last_global_ba_ << " points (" << num_observations_before
+                        << " -> " << reconstruction_.NumObservations() << " observations)";
+  }
+
+  void RunBundleAdjustment(const BundleAdjustmentOptions& ba_options,
+                           const BundleAdjustmentConfig& config) {
+    const BundleAdjustmentSummary ba_summary = BundleAdjust(ba_options, config, &reconstruction_);
+    summary_->ba_seconds += ba_summary.seconds;
+  }
+
+  const IncrementalMapperOptions& options_;
+  const MapperInput& input_;
+  const std::set<image_t>& used_images_;
+  MapperSummary* summary_;
+  Reconstruction reconstruction_;
+  TrackedReconstruction model_;
+  image_t init_image_id1_ = kInvalidImageId;
+  image_t init_image_id2_ = kInvalidImageId;
+  size_t images_at_last_global_ba_ = 0;
+  size_t points_at_last_global_ba_ = 0;
+};
+
+IncrementalMapper::IncrementalMapper(const IncrementalMapperOptions& options,
+                                     const MapperInput& input)
+    : options_(options), input_(input) {
+  options_.Check();
+}
+
+std::vector<Reconstruction> IncrementalMapper::Reconstruct(MapperSummary* summary) {
+  PARALLAX_CHECK(summary != nullptr);
+  Timer timer;
+  *summary = MapperSummary();
+  for (const auto& [image_id, image] : input_.images) summary->images[image_id];
+
+  std::vector<Reconstruction> models;
+  std::set<image_t> used_images;
+  while (static_cast<int>(models.size()) < options_.max_num_models) {
+    ModelBuilder builder(options_, input_, used_images, summary);
+    if (!builder.Initialize()) break;
+    builder.Grow();
+    Reconstruction& model = builder.Model();
+    const size_t num_registered = model.NumRegImages();
+    PARALLAX_LOG(Info) << "mapper: model " << models.size() << " has " << num_registered
+                       << " images and " << model.NumPoints3D() << " points";
+    for (const image_t image_id : model.RegImageIds()) used_images.insert(image_id);
+    if (static_cast<int>(num_registered) >= options_.min_model_size) {
+      models.push_back(ExtractRegisteredModel(model));
+    }
+    if (!options_.multiple_models) break;
+  }
+  std::stable_sort(models.begin(), models.end(), [](const auto& a, const auto& b) {
+    return a.NumRegImages() > b.NumRegImages();
+  });
+
+  for (size_t index = 0; index < models.size(); ++index) {
+    Reconstruction& model = models[index];
+    model.UpdatePointErrors();
+    for (const image_t image_id : model.RegImageIds()) {
+      MapperImageReport& report = summary->images[image_id];
+      report.model_index = static_cast<int>(index);
+      report.reason.clear();
+      report.error_after_ba_px = model.MeanReprojectionErrorOfImage(image_id);
+    }
+  }
+  for (auto& [image_id, report] : summary->images) {
+    if (report.model_index >= 0 || !report.reason.empty()) continue;
+    if (input_.correspondence_graph.NeighborsOf(image_id).empty()) {
+      report.reason = "no verified matches with any other image";
+    } else if (used_images.count(image_id)) {
+      report.reason = "its model had fewer than " + std::to_string(options_.min_model_size) +
+                      " images and was discarded";
+    } else {
+      report.reason = "never connected to a reconstructed image (matched only with images "
+                      "that were not registered)";
+    }
+  }
+  if (models.empty()) {
+    summary->failure =
+        "no initial image pair has enough verified matches (" +
+        std::to_string(options_.init_min_num_inliers) + ") with enough triangulation angle";
+  }
+  summary->seconds = timer.ElapsedSeconds();
+  return models;
+}
+
+}  // namespace parallax

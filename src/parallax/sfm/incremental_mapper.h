@@ -1,0 +1,89 @@
+#pragma once
+
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "parallax/estimators/absolute_pose.h"
+#include "parallax/estimators/bundle_adjustment.h"
+#include "parallax/scene/reconstruction.h"
+#include "parallax/sfm/mapper_input.h"
+#include "parallax/sfm/observation_filter.h"
+#include "parallax/sfm/track_triangulation.h"
+
+namespace parallax {
+
+struct IncrementalMapperOptions {
+  // Initial pair.
+  int init_min_num_inliers = 100;        // Triangulated points the initial pair must give.
+  double init_min_tri_angle_deg = 16.0;  // Median triangulation angle of the initial pair.
+  int init_max_trials = 200;             // Candidate pairs examined per angle threshold.
+  // Registration of the next image.
+  AbsolutePoseEstimationOptions abs_pose;
+  AbsolutePoseRefinementOptions abs_pose_refinement;
+  int abs_pose_min_num_inliers = 30;     // PnP inliers an image needs to be registered.
+  double abs_pose_min_inlier_ratio = 0.25;
+  int max_registration_trials = 2;       // Failed attempts before an image is given up.
+  // Triangulation and filtering.
+  TrackTriangulationOptions triangulation;
+  ObservationFilterOptions filter;
+  // Bundle adjustment.
+  BundleAdjustmentOptions bundle_adjustment;
+  int local_ba_num_images = 6;           // Images optimised around each new image.
+  double global_ba_images_ratio = 1.1;   // Global BA when the model grew by this factor...
+  double global_ba_points_ratio = 1.1;   // ...in images or in points.
+  int global_ba_max_refinements = 3;     // BA + filter + complete rounds at each global BA.
+  // Intrinsics of cameras without a prior focal length are refined in global BA.
+  bool refine_focal_length = true;
+  bool refine_extra_params = true;
+  bool refine_principal_point = false;
+  // Models.
+  int min_model_size = 3;                // Smaller models are discarded.
+  bool multiple_models = true;           // Start a new model when the current one is stuck.
+  int max_num_models = 20;
+  void Check() const;
+};
+
+// What happened to each image, for summary.json and the log.
+struct MapperImageReport {
+  int model_index = -1;  // Index into the returned models; -1 when not registered.
+  std::string reason;    // Why it ended unregistered (empty when registered).
+  int num_registration_trials = 0;
+  size_t num_visible_points = 0;  // 2D-3D correspondences at the last attempt.
+  size_t num_pnp_inliers = 0;
+  // Mean reprojection error right after registration and triangulation (before any bundle
+  // adjustment that includes the image) and in the final model.
+  double error_before_ba_px = std::numeric_limits<double>::quiet_NaN();
+  double error_after_ba_px = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct MapperSummary {
+  std::map<image_t, MapperImageReport> images;
+  size_t num_local_ba = 0;
+  size_t num_global_ba = 0;
+  double ba_seconds = 0;
+  double seconds = 0;
+  std::string failure;  // Set when no model could be started.
+};
+
+// The paper's Algorithm 1 (and COLMAP's incremental mapper): initialise from the best pair,
+// then repeatedly register the image that sees the most (and best spread) triangulated
+// points by PnP, triangulate the tracks it completes, adjust locally, and globally when the
+// model has grown; filter and re-triangulate. When no image can be added, a new model is
+// started from the remaining images. Models come back largest first.
+class IncrementalMapper {
+ public:
+  IncrementalMapper(const IncrementalMapperOptions& options, const MapperInput& input);
+  std::vector<Reconstruction> Reconstruct(MapperSummary* summary);
+
+ private:
+  class ModelBuilder;
+  const IncrementalMapperOptions options_;
+  const MapperInput& input_;
+};
+
+// A copy holding only the registered images, the cameras they use, and the points.
+Reconstruction ExtractRegisteredModel(const Reconstruction& reconstruction);
+
+}  // namespace parallax
