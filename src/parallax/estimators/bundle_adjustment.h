@@ -27,8 +27,8 @@ struct BundleAdjustmentOptions {
 };
 
 // Which images and points take part and what is held constant. Points observed by the
-// images are included automatically; observations in images outside the config make the
-// point constant unless the point is listed in variable_points.
+// images are included automatically; their observations in registered images outside the
+// config are added with those poses constant (COLMAP's behaviour), so they fix the gauge.
 struct BundleAdjustmentConfig {
   std::set<image_t> images;
   std::set<image_t> constant_poses;

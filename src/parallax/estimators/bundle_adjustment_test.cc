@@ -1,0 +1,402 @@
+#include "parallax/estimators/bundle_adjustment.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include "parallax/math/random.h"
+#include "parallax/util/check.h"
+#include "parallax/util/logging.h"
+#include "parallax/util/timer.h"
+
+namespace parallax {
+namespace {
+
+constexpr double kFocalLength = 800;
+constexpr size_t kWidth = 1000;
+constexpr size_t kHeight = 800;
+
+struct SceneOptions {
+  int num_images = 8;
+  int num_points = 300;
+  // 0: every image sees every point; else each point is seen by this many consecutive images.
+  int track_length = 0;
+  double noise_px = 0;
+};
+
+Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - center).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitY()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d rotation;
+  rotation << x.transpose(), y.transpose(), z.transpose();
+  return Rigid3d(rotation, -rotation * center);
+}
+
+// Cameras on a circle of radius 6 looking near the origin at points in a 3 m cube; exact
+// projections through a SIMPLE_RADIAL camera plus optional Gaussian pixel noise.
+Reconstruction SynthesizeScene(const SceneOptions& options) {
+  Reconstruction reconstruction;
+  Camera camera = Camera::Create(1, CameraModelId::kSimpleRadial, kFocalLength, kWidth, kHeight);
+  camera.params[3] = 0.02;
+  reconstruction.AddCamera(camera);
+
+  std::vector<Image> images(options.num_images);
+  for (int i = 0; i < options.num_images; ++i) {
+    const double angle = 2 * M_PI * i / options.num_images;
+    const Eigen::Vector3d center(6 * std::cos(angle), RandomUniformReal(-0.5, 0.5),
+                                 6 * std::sin(angle));
+    const Eigen::Vector3d target(RandomUniformReal(-0.3, 0.3), RandomUniformReal(-0.3, 0.3),
+                                 RandomUniformReal(-0.3, 0.3));
+    images[i].image_id = static_cast<image_t>(i + 1);
+    images[i].camera_id = 1;
+    images[i].name = "image" + std::to_string(i + 1) + ".jpg";
+    images[i].cam_from_world = LookAt(center, target);
+  }
+
+  std::vector<Eigen::Vector3d> points(options.num_points);
+  std::vector<Track> tracks(options.num_points);
+  for (int j = 0; j < options.num_points; ++j) {
+    points[j] = Eigen::Vector3d(RandomUniformReal(-1.5, 1.5), RandomUniformReal(-1.5, 1.5),
+                                RandomUniformReal(-1.5, 1.5));
+    const int first = static_cast<int>(RandomUniformInteger(0, options.num_images - 1));
+    const int length = options.track_length > 0 ? options.track_length : options.num_images;
+    for (int k = 0; k < length; ++k) {
+      Image& image = images[(first + k) % options.num_images];
+      Point2D point2D;
+      point2D.xy =
+          camera.ImgFromCam(image.cam_from_world * points[j]) +
+          Eigen::Vector2d(RandomGaussian(0, options.noise_px), RandomGaussian(0, options.noise_px));
+      tracks[j].AddElement(image.image_id, static_cast<point2D_t>(image.points2D.size()));
+      image.points2D.push_back(point2D);
+    }
+  }
+  for (Image& image : images) {
+    const image_t image_id = image.image_id;
+    reconstruction.AddImage(std::move(image));
+    reconstruction.RegisterImage(image_id);
+  }
+  for (int j = 0; j < options.num_points; ++j) reconstruction.AddPoint3D(points[j], tracks[j]);
+  return reconstruction;
+}
+
+// Fixes the similarity gauge: the first pose and the largest translation coordinate of the
+// second image.
+BundleAdjustmentConfig GaugeFixedConfig(const Reconstruction& reconstruction) {
+  BundleAdjustmentConfig config;
+  for (const image_t image_id : reconstruction.RegImageIds()) config.AddImage(image_id);
+  config.SetConstantPose(1);
+  int coordinate = 0;
+  reconstruction.GetImage(2).cam_from_world.translation.cwiseAbs().maxCoeff(&coordinate);
+  config.constant_translation_coordinates.insert({2, coordinate});
+  return config;
+}
+
+// Moves every variable quantity of `config` away from the truth.
+void Perturb(const BundleAdjustmentConfig& config, double rotation_deg, double translation,
+             double point_offset, Reconstruction* reconstruction) {
+  for (const image_t image_id : config.images) {
+    if (config.constant_poses.count(image_id) > 0) continue;
+    Rigid3d& pose = reconstruction->GetImage(image_id).cam_from_world;
+    const Eigen::Vector3d axis =
+        Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
+            .normalized();
+    pose.rotation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(rotation_deg * M_PI / 180, axis)) * pose.rotation;
+    for (int c = 0; c < 3; ++c) {
+      if (config.constant_translation_coordinates.count({image_id, c}) > 0) continue;
+      pose.translation[c] += RandomGaussian(0, translation);
+    }
+  }
+  for (const auto& [point3D_id, point] : reconstruction->Points3D()) {
+    Eigen::Vector3d& xyz = reconstruction->GetPoint3D(point3D_id).xyz;
+    for (int c = 0; c < 3; ++c) xyz[c] += RandomGaussian(0, point_offset);
+  }
+}
+
+struct SceneErrors {
+  double max_rotation_deg = 0;
+  double max_center = 0;
+  double mean_center = 0;
+  double max_point = 0;
+};
+
+SceneErrors CompareToTruth(const Reconstruction& truth, const Reconstruction& estimate) {
+  SceneErrors errors;
+  for (const auto& [image_id, image] : truth.Images()) {
+    const Image& estimated = estimate.GetImage(image_id);
+    errors.max_rotation_deg = std::max(
+        errors.max_rotation_deg,
+        RotationAngleDegrees(image.cam_from_world.rotation, estimated.cam_from_world.rotation));
+    const double center = (image.ProjectionCenter() - estimated.ProjectionCenter()).norm();
+    errors.max_center = std::max(errors.max_center, center);
+    errors.mean_center += center / truth.NumImages();
+  }
+  for (const auto& [point3D_id, point] : truth.Points3D()) {
+    errors.max_point =
+        std::max(errors.max_point, (point.xyz - estimate.GetPoint3D(point3D_id).xyz).norm());
+  }
+  return errors;
+}
+
+BundleAdjustmentOptions TightOptions() {
+  BundleAdjustmentOptions options;
+  options.loss_function = LossFunctionType::kTrivial;
+  options.function_tolerance = 1e-14;
+  options.gradient_tolerance = 1e-16;
+  options.parameter_tolerance = 1e-14;
+  options.num_threads = 2;
+  return options;
+}
+
+TEST(BundleAdjustment, RecoversNoiselessSceneExactly) {
+  const Reconstruction truth = SynthesizeScene({});
+  Reconstruction estimate = truth;
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Perturb(config, 1.0, 0.05, 0.05, &estimate);
+  EXPECT_GT(CompareToTruth(truth, estimate).max_point, 0.05);
+
+  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(), config, &estimate);
+  ASSERT_TRUE(summary.success) << summary.termination;
+  EXPECT_EQ(summary.num_residuals, truth.NumObservations());
+  EXPECT_GT(summary.num_iterations, 0);
+  EXPECT_LT(summary.final_cost, 1e-12 * summary.initial_cost);
+  const SceneErrors errors = CompareToTruth(truth, estimate);
+  EXPECT_LT(errors.max_rotation_deg, 1e-6);
+  EXPECT_LT(errors.max_center, 1e-6);
+  EXPECT_LT(errors.max_point, 1e-6);
+  for (const auto& [image_id, image] : estimate.Images()) {
+    EXPECT_NEAR(image.cam_from_world.rotation.norm(), 1.0, 1e-14);
+  }
+  // Gauge blocks did not move at all.
+  EXPECT_EQ(estimate.GetImage(1).cam_from_world.translation,
+            truth.GetImage(1).cam_from_world.translation);
+  EXPECT_EQ(estimate.GetImage(1).cam_from_world.rotation.coeffs(),
+            truth.GetImage(1).cam_from_world.rotation.coeffs());
+  EXPECT_EQ(estimate.GetCamera(1).params, truth.GetCamera(1).params);
+}
+
+TEST(BundleAdjustment, NoisyObservationsReachNoiseLevel) {
+  SceneOptions scene;
+  scene.noise_px = 0.5;
+  const Reconstruction truth = SynthesizeScene(scene);
+  Reconstruction estimate = truth;
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Perturb(config, 0.5, 0.02, 0.02, &estimate);
+  const double initial_error = estimate.UpdatePointErrors();
+
+  BundleAdjustmentOptions options = TightOptions();
+  options.function_tolerance = 1e-8;
+  const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
+  ASSERT_TRUE(summary.success) << summary.termination;
+  const double final_error = estimate.UpdatePointErrors();
+  // The mean of |2D Gaussian| with sigma 0.5 is 0.63 px; fitting 941 of 4800 degrees of
+  // freedom takes about 10 % off.
+  EXPECT_LT(final_error, 0.6);
+  EXPECT_GT(final_error, 0.45);
+  EXPECT_LT(final_error, initial_error);
+  EXPECT_LT(summary.final_cost, summary.initial_cost);
+  const SceneErrors errors = CompareToTruth(truth, estimate);
+  // The gauge is fixed through one noisy camera, so its error propagates to all of them.
+  EXPECT_LT(errors.max_rotation_deg, 0.2) << final_error;
+  EXPECT_LT(errors.max_center, 0.02) << errors.max_center << " " << final_error;
+}
+
+TEST(BundleAdjustment, RefinesFocalLength) {
+  const Reconstruction truth = SynthesizeScene({});
+  Reconstruction estimate = truth;
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Perturb(config, 0.2, 0.01, 0.01, &estimate);
+  estimate.GetCamera(1).SetFocalLength(1.05 * kFocalLength);
+
+  BundleAdjustmentOptions options = TightOptions();
+  options.refine_focal_length = true;
+  const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
+  ASSERT_TRUE(summary.success) << summary.termination;
+  const Camera& camera = estimate.GetCamera(1);
+  EXPECT_NEAR(camera.FocalLengthX(), kFocalLength, 1e-3 * kFocalLength);
+  // Only the focal length was free; the subset manifold kept the rest bit for bit.
+  for (size_t idx = 1; idx < camera.params.size(); ++idx) {
+    EXPECT_EQ(camera.params[idx], truth.GetCamera(1).params[idx]);
+  }
+  EXPECT_LT(CompareToTruth(truth, estimate).max_center, 1e-5);
+}
+
+TEST(BundleAdjustment, RefinesPrincipalPointAndDistortionOnly) {
+  const Reconstruction truth = SynthesizeScene({});
+  Reconstruction estimate = truth;
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Camera& camera = estimate.GetCamera(1);
+  camera.params[1] += 5;
+  camera.params[2] -= 4;
+  camera.params[3] = 0;
+
+  BundleAdjustmentOptions options = TightOptions();
+  options.refine_principal_point = true;
+  options.refine_extra_params = true;
+  ASSERT_TRUE(BundleAdjust(options, config, &estimate).success);
+  const std::vector<double>& expected = truth.GetCamera(1).params;
+  EXPECT_EQ(camera.params[0], expected[0]);
+  EXPECT_NEAR(camera.params[1], expected[1], 1e-6);
+  EXPECT_NEAR(camera.params[2], expected[2], 1e-6);
+  EXPECT_NEAR(camera.params[3], expected[3], 1e-9);
+}
+
+TEST(BundleAdjustment, RobustLossResistsOutliers) {
+  SceneOptions scene;
+  scene.noise_px = 0.3;
+  const Reconstruction truth = SynthesizeScene(scene);
+  Reconstruction corrupted = truth;
+  size_t num_outliers = 0;
+  for (const auto& [image_id, image] : truth.Images()) {
+    for (Point2D& point2D : corrupted.GetImage(image_id).points2D) {
+      if (RandomUniformReal(0, 1) >= 0.05) continue;
+      const double angle = RandomUniformReal(0, 2 * M_PI);
+      point2D.xy += RandomUniformReal(10, 50) * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+      ++num_outliers;
+    }
+  }
+  EXPECT_GT(num_outliers, 60u);
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Perturb(config, 0.5, 0.02, 0.02, &corrupted);
+
+  BundleAdjustmentOptions options = TightOptions();
+  options.function_tolerance = 1e-8;
+  Reconstruction trivial = corrupted;
+  ASSERT_TRUE(BundleAdjust(options, config, &trivial).success);
+  options.loss_function = LossFunctionType::kCauchy;
+  options.loss_scale_px = 1.0;
+  Reconstruction robust = corrupted;
+  ASSERT_TRUE(BundleAdjust(options, config, &robust).success);
+
+  const SceneErrors trivial_errors = CompareToTruth(truth, trivial);
+  const SceneErrors robust_errors = CompareToTruth(truth, robust);
+  EXPECT_LT(robust_errors.mean_center, 0.5 * trivial_errors.mean_center);
+  EXPECT_LT(robust_errors.max_rotation_deg, trivial_errors.max_rotation_deg);
+  EXPECT_LT(robust_errors.max_center, 0.01);
+}
+
+TEST(BundleAdjustment, ImagesOutsideConfigStayConstant) {
+  const Reconstruction truth = SynthesizeScene({});
+  Reconstruction estimate = truth;
+  // Images 1 and 2 are outside: their observations still constrain the points (and fix the
+  // gauge) but their poses must not move.
+  BundleAdjustmentConfig config;
+  for (image_t image_id = 3; image_id <= 8; ++image_id) config.AddImage(image_id);
+  Perturb(config, 1.0, 0.05, 0.05, &estimate);
+  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(), config, &estimate);
+  ASSERT_TRUE(summary.success) << summary.termination;
+  EXPECT_EQ(summary.num_residuals, truth.NumObservations());
+  for (image_t image_id = 1; image_id <= 2; ++image_id) {
+    EXPECT_EQ(estimate.GetImage(image_id).cam_from_world.rotation.coeffs(),
+              truth.GetImage(image_id).cam_from_world.rotation.coeffs());
+    EXPECT_EQ(estimate.GetImage(image_id).cam_from_world.translation,
+              truth.GetImage(image_id).cam_from_world.translation);
+  }
+  const SceneErrors errors = CompareToTruth(truth, estimate);
+  EXPECT_LT(errors.max_center, 1e-6);
+  EXPECT_LT(errors.max_point, 1e-6);
+}
+
+TEST(BundleAdjustment, ConstantCamerasAndPointsStayFixed) {
+  const Reconstruction truth = SynthesizeScene({});
+  Reconstruction estimate = truth;
+  BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  config.constant_cameras.insert(1);
+  for (point3D_t point3D_id = 1; point3D_id <= 10; ++point3D_id) {
+    config.constant_points.insert(point3D_id);
+  }
+  Perturb(config, 0.5, 0.02, 0.0, &estimate);
+  estimate.GetPoint3D(1).xyz.x() += 0.01;  // A wrong constant point stays wrong.
+  const Eigen::Vector3d fixed_point = estimate.GetPoint3D(1).xyz;
+  BundleAdjustmentOptions options = TightOptions();
+  options.refine_focal_length = true;
+  options.refine_extra_params = true;
+  ASSERT_TRUE(BundleAdjust(options, config, &estimate).success);
+  EXPECT_EQ(estimate.GetCamera(1).params, truth.GetCamera(1).params);
+  EXPECT_EQ(estimate.GetPoint3D(1).xyz, fixed_point);
+  EXPECT_EQ(estimate.GetPoint3D(2).xyz, truth.GetPoint3D(2).xyz);
+}
+
+TEST(BundleAdjustment, LargeProblemUsesSparseSolver) {
+  SceneOptions scene;
+  scene.num_images = 60;
+  scene.num_points = 600;
+  scene.track_length = 6;
+  const Reconstruction truth = SynthesizeScene(scene);
+  Reconstruction estimate = truth;
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Perturb(config, 0.3, 0.01, 0.01, &estimate);
+  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(), config, &estimate);
+  ASSERT_TRUE(summary.success) << summary.termination;
+  const SceneErrors errors = CompareToTruth(truth, estimate);
+  EXPECT_LT(errors.max_center, 1e-6);
+  EXPECT_LT(errors.max_point, 1e-6);
+}
+
+TEST(BundleAdjustment, EmptyOrUnobservedConfigFailsGracefully) {
+  Reconstruction reconstruction = SynthesizeScene({});
+  BundleAdjustmentConfig config;
+  EXPECT_FALSE(BundleAdjust(BundleAdjustmentOptions(), config, &reconstruction).success);
+
+  Image lonely;
+  lonely.image_id = 100;
+  lonely.camera_id = 1;
+  lonely.points2D.resize(5);
+  reconstruction.AddImage(lonely);
+  reconstruction.RegisterImage(100);
+  config.AddImage(100);
+  const BundleAdjustmentSummary summary =
+      BundleAdjust(BundleAdjustmentOptions(), config, &reconstruction);
+  EXPECT_FALSE(summary.success);
+  EXPECT_EQ(summary.num_residuals, 0u);
+
+  // Together with observed images, the unobserved one is simply skipped.
+  config = GaugeFixedConfig(reconstruction);
+  config.images.erase(100);
+  config.AddImage(100);
+  EXPECT_TRUE(BundleAdjust(BundleAdjustmentOptions(), config, &reconstruction).success);
+}
+
+TEST(BundleAdjustment, OptionsCheck) {
+  BundleAdjustmentOptions options;
+  EXPECT_NO_THROW(options.Check());
+  options.loss_scale_px = 0;
+  EXPECT_THROW(options.Check(), CheckError);
+  options = BundleAdjustmentOptions();
+  options.num_threads = 0;
+  EXPECT_THROW(options.Check(), CheckError);
+}
+
+// Timing of one mapper-sized global BA; run with --gtest_also_run_disabled_tests.
+TEST(BundleAdjustment, DISABLED_Timing47Images8000Points) {
+  SceneOptions scene;
+  scene.num_images = 47;
+  scene.num_points = 8000;
+  scene.track_length = 8;
+  scene.noise_px = 0.5;
+  const Reconstruction truth = SynthesizeScene(scene);
+  Reconstruction estimate = truth;
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Perturb(config, 0.3, 0.01, 0.01, &estimate);
+  BundleAdjustmentOptions options;
+  if (std::getenv("PARALLAX_BA_REPORT") != nullptr) {
+    options.print_summary = true;  // Ceres' full report at debug level.
+    SetLogLevel(LogLevel::kDebug);
+  }
+  const Timer timer;
+  const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
+  std::printf(
+      "BA 47 images, 8000 points, %zu observations: %.3f s wall (%.3f s in BundleAdjust), "
+      "%d iterations, %s\n",
+      summary.num_residuals, timer.ElapsedSeconds(), summary.seconds, summary.num_iterations,
+      summary.termination.c_str());
+  EXPECT_TRUE(summary.success);
+}
+
+}  // namespace
+}  // namespace parallax
