@@ -5,6 +5,7 @@
 namespace parallax::cli {
 
 int RunVersion(int argc, char** argv);
+int RunDemo(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
 int RunFeatures(int argc, char** argv);
 int RunMatch(int argc, char** argv);

@@ -15,6 +15,17 @@ struct Command {
 
 // The table of subcommands, in the order a user meets them.
 constexpr Command kCommands[] = {
+    {"demo", "Synthesise a scene, reconstruct and evaluate it (no data needed)",
+     parallax::cli::RunDemo},
+    {"reconstruct", "Photos to cameras and points: features, matching, mapping",
+     parallax::cli::RunReconstruct},
+    {"features", "Detect SIFT features in a folder of images", parallax::cli::RunFeatures},
+    {"match", "Match and verify image pairs in a database", parallax::cli::RunMatch},
+    {"mapper", "Run the incremental mapper on an existing database", parallax::cli::RunMapper},
+    {"evaluate", "Compare a model's camera poses with ground truth", parallax::cli::RunEvaluate},
+    {"report", "Write a self-contained HTML report of a run", parallax::cli::RunReport},
+    {"calibrate", "Calibrate a camera from chessboard photos", parallax::cli::RunCalibrate},
+    {"synth", "Render a synthetic temple scene with exact cameras", parallax::cli::RunSynth},
     {"version", "Print the version", parallax::cli::RunVersion},
 };
 

@@ -27,6 +27,8 @@ void IncrementalMapperOptions::Check() const {
   filter.Check();
   bundle_adjustment.Check();
   PARALLAX_CHECK_GE(local_ba_num_images, 2);
+  PARALLAX_CHECK_GE(local_ba_max_iterations, 1);
+  PARALLAX_CHECK_GE(global_ba_max_iterations, 1);
   PARALLAX_CHECK_GE(global_ba_images_ratio, 1.0);
   PARALLAX_CHECK_GE(global_ba_points_ratio, 1.0);
   PARALLAX_CHECK_GE(global_ba_max_refinements, 1);
@@ -299,8 +301,12 @@ class IncrementalMapper::ModelBuilder {
     }
   }
 
-  BundleAdjustmentOptions BaOptions(bool refine_intrinsics) const {
+  // Local adjustments keep intrinsics fixed; global ones refine those without a prior.
+  BundleAdjustmentOptions BaOptions(bool global) const {
+    const bool refine_intrinsics = global;
     BundleAdjustmentOptions ba = options_.bundle_adjustment;
+    ba.max_num_iterations =
+        global ? options_.global_ba_max_iterations : options_.local_ba_max_iterations;
     ba.refine_focal_length = refine_intrinsics && options_.refine_focal_length;
     ba.refine_extra_params = refine_intrinsics && options_.refine_extra_params;
     ba.refine_principal_point = refine_intrinsics && options_.refine_principal_point;

@@ -31,6 +31,8 @@ struct IncrementalMapperOptions {
   // Bundle adjustment.
   BundleAdjustmentOptions bundle_adjustment;
   int local_ba_num_images = 6;           // Images optimised around each new image.
+  int local_ba_max_iterations = 25;      // Solver iterations of a local adjustment.
+  int global_ba_max_iterations = 50;     // Solver iterations of a global adjustment.
   double global_ba_images_ratio = 1.1;   // Global BA when the model grew by this factor...
   double global_ba_points_ratio = 1.1;   // ...in images or in points.
   int global_ba_max_refinements = 3;     // BA + filter + complete rounds at each global BA.

@@ -1,0 +1,61 @@
+#include "parallax/cli/pipeline_options_cli.h"
+
+#include "parallax/pipeline/camera_setup.h"
+
+namespace parallax::cli {
+
+void ExtractionFlags::Add(CLI::App& app, FeatureExtractionOptions* options) {
+  app.add_option("--camera-model", options->camera.camera_model,
+                 "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV (default: "
+                 "SIMPLE_RADIAL, or PINHOLE with known intrinsics)");
+  auto* params_option = app.add_option("--camera-params", camera_params_,
+                                       "Intrinsics in the model's order, e.g. fx,fy,cx,cy");
+  app.add_option("--intrinsics", options->camera.intrinsics_path,
+                 "Text file with the 3x3 calibration matrix K")
+      ->excludes(params_option);
+  auto* single_flag =
+      app.add_flag("--single-camera", options->camera.single_camera, "One camera for all images");
+  app.add_flag("--camera-per-image", options->camera.camera_per_image, "One camera per image")
+      ->excludes(single_flag);
+  app.add_option("--max-features", options->sift.max_num_features, "Keypoints kept per image")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-image-size", options->sift.max_image_size,
+                 "Longest side in pixels before detection (larger images are downscaled)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-image-pixels", options->reader.max_image_pixels,
+                 "Refuse images with more pixels than this, before decoding")
+      ->capture_default_str();
+  app.add_flag("--no-root-sift", no_root_sift_, "Plain L2-normalised SIFT instead of RootSIFT");
+}
+
+void ExtractionFlags::Apply(FeatureExtractionOptions* options) const {
+  if (!camera_params_.empty()) options->camera.camera_params = ParseCameraParams(camera_params_);
+  if (no_root_sift_) options->sift.root_sift = false;
+}
+
+void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) {
+  app.add_option("--pairs", pair_mode_, "Which pairs to match")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"exhaustive", "sequential"}));
+  app.add_option("--overlap", options->sequential_overlap,
+                 "Sequential mode: neighbours matched per image")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--ratio", options->matching.max_ratio, "Lowe's ratio test threshold")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_flag("--no-cross-check", no_cross_check_, "Keep matches that are not mutual");
+  app.add_option("--max-error", options->geometry.max_error_px,
+                 "Geometric verification RANSAC threshold, pixels")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
+void MatchingFlags::Apply(FeatureMatchingPipelineOptions* options) const {
+  options->pair_mode = *PairModeFromName(pair_mode_);
+  if (no_cross_check_) options->matching.cross_check = false;
+}
+
+}  // namespace parallax::cli

@@ -1,0 +1,62 @@
+#include <iostream>
+
+#include "parallax/cli/cli_common.h"
+#include "parallax/cli/commands.h"
+#include "parallax/cli/mapper_options_cli.h"
+#include "parallax/cli/pipeline_options_cli.h"
+#include "parallax/math/random.h"
+#include "parallax/pipeline/reconstruction_pipeline.h"
+
+namespace parallax::cli {
+
+int RunReconstruct(int argc, char** argv) {
+  CLI::App app("Reconstruct cameras and a sparse point cloud from a folder of photos",
+               "parallax reconstruct");
+  std::string image_dir, output_dir, database_path;
+  uint64_t seed = 0;
+  int num_threads = -1;
+  ReconstructionPipelineOptions options;
+  ExtractionFlags extraction_flags;
+  MatchingFlags matching_flags;
+  app.add_option("--images", image_dir, "Folder of images (not recursive)")->required();
+  app.add_option("--output", output_dir,
+                 "Output folder: sparse/<k>/, points.ply, summary.json, database.db")
+      ->required();
+  app.add_option("--database", database_path, "Database to use or resume (default OUT/database.db)");
+  app.add_option("--threads", num_threads, "Worker threads for every stage (-1: all cores)")
+      ->capture_default_str();
+  app.add_option("--seed", seed, "Random seed (same inputs, options and seed: same model)")
+      ->capture_default_str();
+  extraction_flags.Add(app, &options.extraction);
+  matching_flags.Add(app, &options.matching);
+  AddMapperOptions(app, &options.mapping);
+  VerbosityFlags flags;
+  AddVerbosityFlags(app, &flags);
+  return RunCommand(app, argc, argv, flags, [&] {
+    SetPRNGSeed(seed);
+    extraction_flags.Apply(&options.extraction);
+    matching_flags.Apply(&options.matching);
+    options.database_path = database_path;
+    options.extraction.num_threads = num_threads;
+    options.matching.num_threads = num_threads;
+    options.mapping.mapper.bundle_adjustment.num_threads = num_threads;
+    const ReconstructionPipelineResult result =
+        RunReconstructionPipeline(options, image_dir, output_dir);
+    PrintMappingResult(result.mapping, output_dir);
+    if (!result.Success()) {
+      std::cerr << "error: " << image_dir << ": no model could be started: "
+                << result.mapping.summary.failure << std::endl;
+      return 1;
+    }
+    double total = 0;
+    for (const auto& [stage, seconds] : result.timings) {
+      std::cout << stage << ": " << seconds << " s\n";
+      total += seconds;
+    }
+    std::cout << "total: " << total << " s; summary: "
+              << (std::filesystem::path(output_dir) / "summary.json").string() << std::endl;
+    return 0;
+  });
+}
+
+}  // namespace parallax::cli

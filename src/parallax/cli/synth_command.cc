@@ -1,0 +1,70 @@
+#include <iostream>
+
+#include "parallax/cli/cli_common.h"
+#include "parallax/cli/commands.h"
+#include "parallax/render/synthetic_scene.h"
+#include "parallax/util/timer.h"
+
+namespace parallax::cli {
+
+int RunSynth(int argc, char** argv) {
+  CLI::App app("Render a synthetic temple scene with exact cameras (images, <name>_par.txt, K.txt, "
+               "gt/ COLMAP model)",
+               "parallax synth");
+  std::string output_dir, layout = "ring", antialiasing = "quincunx";
+  SyntheticSceneOptions options;
+  bool no_shadows = false;
+  app.add_option("--output", output_dir, "Folder to write the views and cameras into")->required();
+  app.add_option("--views", options.num_views, "Number of views")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 100000));
+  app.add_option("--layout", layout,
+                 "ring (around one temple), hemisphere (a spiral above it) or sequence (a walk "
+                 "past a row of temples, for sequential matching)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"ring", "hemisphere", "sequence"}));
+  app.add_option("--width", options.width, "Image width in pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 20000));
+  app.add_option("--height", options.height, "Image height in pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 20000));
+  app.add_option("--focal", options.focal_length, "Focal length in pixels (0: 0.9 * width)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", options.seed, "Seed of textures, poses, lighting and noise")->capture_default_str();
+  app.add_option("--noise", options.noise_stddev, "Pixel noise standard deviation in grey levels")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--blur", options.blur_sigma, "Gaussian blur sigma in pixels")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--lighting", options.lighting_variation,
+                 "Per-view lighting change in [0, 1] (sun direction and exposure)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--antialiasing", antialiasing, "none, quincunx (2 rays per pixel) or grid3x3")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"none", "quincunx", "grid3x3"}));
+  app.add_flag("--no-shadows", no_shadows, "Do not cast sun shadows");
+  app.add_option("--name", options.name, "Prefix of the camera file <name>_par.txt")->capture_default_str();
+  app.add_option("--threads", options.num_threads, "Worker threads (-1: all cores)")->capture_default_str();
+  VerbosityFlags flags;
+  AddVerbosityFlags(app, &flags);
+  return RunCommand(app, argc, argv, flags, [&] {
+    options.layout = SyntheticSceneLayoutFromName(layout);
+    options.antialiasing = antialiasing == "none"       ? Antialiasing::kNone
+                           : antialiasing == "grid3x3" ? Antialiasing::kGrid3x3
+                                                       : Antialiasing::kQuincunx;
+    options.shadows = !no_shadows;
+    const Timer timer;
+    const Reconstruction views = GenerateSyntheticScene(options, output_dir);
+    std::cout << "synth: " << views.NumImages() << " views (" << layout << ", " << options.width << "x"
+              << options.height << ", f = " << options.EffectiveFocalLength() << " px) in "
+              << output_dir << "; cameras in " << options.name << "_par.txt, K.txt, gt/; "
+              << timer.ElapsedSeconds() << " s" << std::endl;
+    return 0;
+  });
+}
+
+}  // namespace parallax::cli

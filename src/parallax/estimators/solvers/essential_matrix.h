@@ -1,0 +1,67 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "parallax/geometry/epipolar.h"
+
+namespace parallax {
+
+// Essential matrix solvers on normalised image coordinates (z = 1, i.e. K^-1 applied),
+// x2^T E x1 = 0. Every solver overwrites `models` with all candidates (unit Frobenius norm,
+// arbitrary sign) and leaves it empty on degenerate input (too few points, non-finite
+// coordinates, an epipolar system of too low rank).
+
+// The 5-point algorithm (Nistér, "An efficient solution to the five-point relative pose
+// problem", PAMI 2004), in the Gröbner-basis form of Stewénius, Engels & Nistér, "Recent
+// developments on direct relative orientation", ISPRS 2006: E = x X + y Y + z Z + W over the
+// null space of the 5 x 9 epipolar system; det(E) = 0 and 2 E E^T E - tr(E E^T) E = 0 give 10
+// cubics in (x, y, z); eliminating the 10 cubic monomials leaves the 10 x 10 action matrix of
+// multiplication by x on {x^2, xy, xz, y^2, yz, z^2, x, y, z, 1}, whose real eigenvectors are
+// the (up to 10) solutions. N > 5 uses the four least-squares null vectors.
+void EstimateEssentialMatrixFivePoint(const std::vector<Eigen::Vector2d>& points1,
+                                      const std::vector<Eigen::Vector2d>& points2,
+                                      std::vector<Eigen::Matrix3d>* models);
+
+// The normalized 8-point algorithm on N >= 8 points, then the projection onto the essential
+// manifold (singular values (1, 1, 0); Hartley & Zisserman, result 9.18). One model.
+void EstimateEssentialMatrixEightPoint(const std::vector<Eigen::Vector2d>& points1,
+                                       const std::vector<Eigen::Vector2d>& points2,
+                                       std::vector<Eigen::Matrix3d>* models);
+
+// LO-RANSAC estimators (optim/ransac.h); residuals are squared Sampson errors in normalised
+// units (a pixel threshold divided by the focal length).
+struct EssentialMatrixFivePointEstimator {
+  using X_t = Eigen::Vector2d;
+  using Y_t = Eigen::Vector2d;
+  using M_t = Eigen::Matrix3d;
+  static constexpr int kMinNumSamples = 5;
+
+  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
+                std::vector<M_t>* models) const {
+    EstimateEssentialMatrixFivePoint(points1, points2, models);
+  }
+  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2, const M_t& E,
+                 std::vector<double>* squared_residuals) const {
+    ComputeSquaredSampsonError(points1, points2, E, squared_residuals);
+  }
+};
+
+// Least squares on all given points: the local (LO) estimator that refits E on the inliers.
+struct EssentialMatrixEightPointEstimator {
+  using X_t = Eigen::Vector2d;
+  using Y_t = Eigen::Vector2d;
+  using M_t = Eigen::Matrix3d;
+  static constexpr int kMinNumSamples = 8;
+
+  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
+                std::vector<M_t>* models) const {
+    EstimateEssentialMatrixEightPoint(points1, points2, models);
+  }
+  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2, const M_t& E,
+                 std::vector<double>* squared_residuals) const {
+    ComputeSquaredSampsonError(points1, points2, E, squared_residuals);
+  }
+};
+
+}  // namespace parallax

@@ -1,0 +1,494 @@
+#include "parallax/estimators/two_view_geometry.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "parallax/estimators/solvers/essential_matrix.h"
+#include "parallax/estimators/solvers/fundamental_matrix.h"
+#include "parallax/estimators/solvers/homography_matrix.h"
+#include "parallax/geometry/epipolar.h"
+#include "parallax/geometry/essential_matrix.h"
+#include "parallax/geometry/triangulation.h"
+#include "parallax/util/check.h"
+#include "parallax/util/logging.h"
+
+namespace parallax {
+namespace {
+
+// Watermarks sit in this fraction of the image width/height along each border (COLMAP's
+// watermark_border_size default).
+constexpr double kWatermarkBorderSize = 0.1;
+// A planar pair whose baseline is below this fraction of the plane's distance is a pure
+// rotation for reconstruction purposes (rays from both centres meet at < ~0.3 degrees).
+constexpr double kMaxPanoramicBaselineRatio = 0.005;
+// Triangulated points farther than this many baselines do not vote for a homography pose.
+constexpr double kMaxDepthInBaselines = 1000.0;
+
+// A pure 2D translation x2 = x1 + t: the model of a watermark or time stamp that sits at the
+// same place in both images.
+struct TranslationEstimator {
+  using X_t = Eigen::Vector2d;
+  using Y_t = Eigen::Vector2d;
+  using M_t = Eigen::Vector2d;
+  static constexpr int kMinNumSamples = 1;
+
+  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
+                std::vector<M_t>* models) const {
+    models->clear();
+    if (points1.empty()) return;
+    Eigen::Vector2d translation = Eigen::Vector2d::Zero();
+    for (size_t i = 0; i < points1.size(); ++i) translation += points2[i] - points1[i];
+    translation /= static_cast<double>(points1.size());
+    if (translation.allFinite()) models->push_back(translation);
+  }
+  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
+                 const M_t& translation, std::vector<double>* squared_residuals) const {
+    squared_residuals->resize(points1.size());
+    for (size_t i = 0; i < points1.size(); ++i) {
+      (*squared_residuals)[i] = (points2[i] - points1[i] - translation).squaredNorm();
+    }
+  }
+};
+
+RansacOptions MakeRansacOptions(const TwoViewGeometryOptions& options, double max_error) {
+  RansacOptions ransac_options;
+  ransac_options.max_error = max_error;
+  ransac_options.confidence = options.confidence;
+  ransac_options.max_num_trials = options.max_num_trials;
+  ransac_options.min_inlier_ratio = options.min_inlier_ratio;
+  return ransac_options;
+}
+
+// True when the points spread less than `tolerance` across their principal line (or all
+// coincide): no two-view model is determined by them.
+bool AreNearlyCollinear(const std::vector<Eigen::Vector2d>& points, const std::vector<char>& mask,
+                        double tolerance) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  size_t count = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!mask[i]) continue;
+    mean += points[i];
+    ++count;
+  }
+  if (count < 3) return true;
+  mean /= static_cast<double>(count);
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!mask[i]) continue;
+    const Eigen::Vector2d centered = points[i] - mean;
+    covariance += centered * centered.transpose();
+  }
+  covariance /= static_cast<double>(count);
+  // Smallest eigenvalue of the symmetric 2x2 covariance in closed form.
+  const double half_trace = 0.5 * covariance.trace();
+  const double half_difference = 0.5 * (covariance(0, 0) - covariance(1, 1));
+  const double min_variance = half_trace - std::sqrt(half_difference * half_difference +
+                                                     covariance(0, 1) * covariance(0, 1));
+  return !(min_variance > tolerance * tolerance);
+}
+
+// COLMAP's watermark test: most inliers lie in the border strips of both images and move by
+// one common 2D translation.
+bool DetectWatermark(const Camera& camera1, const std::vector<Eigen::Vector2d>& points1,
+                     const Camera& camera2, const std::vector<Eigen::Vector2d>& points2,
+                     const std::vector<char>& inlier_mask, size_t num_inliers,
+                     const TwoViewGeometryOptions& options) {
+  if (camera1.width == 0 || camera1.height == 0 || camera2.width == 0 || camera2.height == 0) {
+    return false;
+  }
+  const auto in_border = [](const Camera& camera, const Eigen::Vector2d& point) {
+    const double border_x = kWatermarkBorderSize * static_cast<double>(camera.width);
+    const double border_y = kWatermarkBorderSize * static_cast<double>(camera.height);
+    return point.x() < border_x || point.x() > static_cast<double>(camera.width) - border_x ||
+           point.y() < border_y || point.y() > static_cast<double>(camera.height) - border_y;
+  };
+  std::vector<Eigen::Vector2d> border_points1, border_points2;
+  for (size_t i = 0; i < points1.size(); ++i) {
+    if (inlier_mask[i] && in_border(camera1, points1[i]) && in_border(camera2, points2[i])) {
+      border_points1.push_back(points1[i]);
+      border_points2.push_back(points2[i]);
+    }
+  }
+  const double min_num_watermark_inliers = options.watermark_min_inlier_ratio * num_inliers;
+  if (border_points1.empty() || border_points1.size() < min_num_watermark_inliers) return false;
+  const LoRansac<TranslationEstimator> ransac(MakeRansacOptions(options, options.max_error_px));
+  const auto report = ransac.Estimate(border_points1, border_points2);
+  return report.success && report.num_inliers >= min_num_watermark_inliers;
+}
+
+// The candidate poses of a calibrated homography H = R + T N^T (T = translation / plane
+// distance, N the plane's unit normal in cam1), by the SVD method of Ma, Soatto, Kosecka &
+// Sastry, "An Invitation to 3-D Vision", sec. 5.3.3. `H` must be scaled so that its middle
+// singular value is 1 and (H x1)_z > 0 on the points. Returns the 2 solutions (R, T), each
+// standing for the candidates (R, T) and (R, -T) with the normal negated, or 1 with T = 0 when
+// H is a rotation (all singular values 1).
+struct HomographyCandidate {
+  Eigen::Matrix3d rotation;
+  Eigen::Vector3d translation_over_distance;
+};
+
+int DecomposeCalibratedHomography(const Eigen::Matrix3d& H,
+                                  std::array<HomographyCandidate, 2>* candidates) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Vector3d singular_values = svd.singularValues();
+  const double s1_squared = singular_values(0) * singular_values(0);
+  const double s3_squared = singular_values(2) * singular_values(2);
+  if (s1_squared - s3_squared < 1e-12) {
+    Eigen::Matrix3d U = svd.matrixU();
+    Eigen::Matrix3d V = svd.matrixV();
+    Eigen::Matrix3d rotation = U * V.transpose();
+    if (rotation.determinant() < 0) rotation = -rotation;
+    (*candidates)[0] = {rotation, Eigen::Vector3d::Zero()};
+    return 1;
+  }
+  const Eigen::Matrix3d V = svd.matrixV();
+  const Eigen::Vector3d v1 = V.col(0), v2 = V.col(1), v3 = V.col(2);
+  const double scale = 1.0 / std::sqrt(s1_squared - s3_squared);
+  const double a = std::sqrt(std::max(0.0, 1.0 - s3_squared));
+  const double b = std::sqrt(std::max(0.0, s1_squared - 1.0));
+  const std::array<Eigen::Vector3d, 2> us = {scale * (a * v1 + b * v3), scale * (a * v1 - b * v3)};
+  int num_candidates = 0;
+  for (const Eigen::Vector3d& u : us) {
+    Eigen::Matrix3d U, W;
+    U << v2, u, v2.cross(u);
+    const Eigen::Vector3d H_v2 = H * v2;
+    const Eigen::Vector3d H_u = H * u;
+    W << H_v2, H_u, H_v2.cross(H_u);
+    const Eigen::Matrix3d rotation = W * U.transpose();
+    const Eigen::Vector3d normal = v2.cross(u);
+    const Eigen::Vector3d translation = (H - rotation) * normal;
+    (*candidates)[num_candidates++] = {rotation, translation};
+  }
+  return num_candidates;
+}
+
+// Relative pose from a calibrated homography: the candidate that puts the most triangulated
+// points in front of both cameras. `panoramic` is set when the baseline is negligible.
+bool PoseFromCalibratedHomography(const Eigen::Matrix3d& H_calibrated,
+                                  const std::vector<Eigen::Vector2d>& points1,
+                                  const std::vector<Eigen::Vector2d>& points2,
+                                  Rigid3d* cam2_from_cam1, std::vector<Eigen::Vector3d>* points3D,
+                                  bool* panoramic) {
+  points3D->clear();
+  if (!H_calibrated.allFinite() || points1.empty()) return false;
+  const Eigen::Vector3d singular_values =
+      Eigen::JacobiSVD<Eigen::Matrix3d>(H_calibrated).singularValues();
+  if (!(singular_values(1) > 0.0)) return false;
+  Eigen::Matrix3d H = H_calibrated / singular_values(1);
+  size_t num_positive = 0;
+  for (const Eigen::Vector2d& point1 : points1) {
+    num_positive += H.row(2).dot(point1.homogeneous()) > 0;
+  }
+  if (2 * num_positive < points1.size()) H = -H;
+
+  std::array<HomographyCandidate, 2> candidates;
+  const int num_candidates = DecomposeCalibratedHomography(H, &candidates);
+  if (num_candidates == 1) {
+    *panoramic = true;
+    *cam2_from_cam1 =
+        Rigid3d(Eigen::Quaterniond(candidates[0].rotation).normalized(), Eigen::Vector3d::Zero());
+    return cam2_from_cam1->rotation.coeffs().allFinite();
+  }
+
+  // As in PoseFromEssentialMatrix: with (R, -T) the triangulated point is -X, so one
+  // triangulation per solution scores both signs. Candidate 2 c + s is (R_c, s == 0 ? T_c : -T_c).
+  const Matrix3x4d cam1_from_cam1 = Matrix3x4d::Identity();
+  const auto in_front = [](double depth1, double depth2) {
+    return depth1 > std::numeric_limits<double>::epsilon() && depth1 < kMaxDepthInBaselines &&
+           depth2 > std::numeric_limits<double>::epsilon() && depth2 < kMaxDepthInBaselines;
+  };
+  std::array<std::vector<Eigen::Vector3d>, 4> candidate_points;
+  for (int candidate = 0; candidate < num_candidates; ++candidate) {
+    const Eigen::Vector3d& translation = candidates[candidate].translation_over_distance;
+    const double baseline = translation.norm();
+    if (!(baseline > 0.0) || !candidates[candidate].rotation.allFinite()) continue;
+    Matrix3x4d cam2_from_cam1_matrix;
+    cam2_from_cam1_matrix << candidates[candidate].rotation, translation / baseline;
+    for (size_t i = 0; i < points1.size(); ++i) {
+      const std::optional<Eigen::Vector3d> point3D =
+          TriangulatePoint(cam1_from_cam1, cam2_from_cam1_matrix, points1[i], points2[i]);
+      if (!point3D) continue;
+      const double depth1 = (*point3D)(2);
+      const double depth2 = cam2_from_cam1_matrix.row(2).dot(point3D->homogeneous());
+      if (in_front(depth1, depth2)) {
+        candidate_points[2 * candidate].push_back(*point3D);
+      } else if (in_front(-depth1, -depth2)) {
+        candidate_points[2 * candidate + 1].push_back(-*point3D);
+      }
+    }
+  }
+  int best_candidate = 0;
+  for (int candidate = 1; candidate < 4; ++candidate) {
+    if (candidate_points[candidate].size() > candidate_points[best_candidate].size()) {
+      best_candidate = candidate;
+    }
+  }
+  points3D->swap(candidate_points[best_candidate]);
+
+  // Too little baseline for any point to triangulate in front is a rotation as well.
+  const Eigen::Matrix3d& rotation = candidates[best_candidate / 2].rotation;
+  const Eigen::Vector3d translation = (best_candidate % 2 == 0 ? 1.0 : -1.0) *
+                                      candidates[best_candidate / 2].translation_over_distance;
+  *panoramic = points3D->empty() || translation.norm() < kMaxPanoramicBaselineRatio;
+  if (*panoramic) {
+    points3D->clear();
+    *cam2_from_cam1 = Rigid3d(Eigen::Quaterniond(rotation).normalized(), Eigen::Vector3d::Zero());
+  } else {
+    *cam2_from_cam1 = Rigid3d(Eigen::Quaterniond(rotation).normalized(), translation.normalized());
+  }
+  return cam2_from_cam1->rotation.coeffs().allFinite() && cam2_from_cam1->translation.allFinite();
+}
+
+}  // namespace
+
+void TwoViewGeometryOptions::Check() const {
+  PARALLAX_CHECK_GE(min_num_inliers, 0);
+  PARALLAX_CHECK_GT(max_error_px, 0.0);
+  PARALLAX_CHECK(confidence > 0.0 && confidence < 1.0);
+  PARALLAX_CHECK_GT(max_num_trials, 0);
+  PARALLAX_CHECK(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0);
+  PARALLAX_CHECK(min_E_F_inlier_ratio >= 0.0 && min_E_F_inlier_ratio <= 1.0);
+  PARALLAX_CHECK(max_H_inlier_ratio >= 0.0 && max_H_inlier_ratio <= 1.0);
+  PARALLAX_CHECK(watermark_min_inlier_ratio >= 0.0 && watermark_min_inlier_ratio <= 1.0);
+}
+
+TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
+                                        const std::vector<Eigen::Vector2d>& points1,
+                                        const Camera& camera2,
+                                        const std::vector<Eigen::Vector2d>& points2,
+                                        const FeatureMatches& matches,
+                                        const TwoViewGeometryOptions& options) {
+  options.Check();
+  TwoViewGeometry geometry;
+  geometry.config = TwoViewGeometry::kDegenerate;
+
+  // Matches with non-finite keypoints cannot be explained by any model: leave them out.
+  FeatureMatches valid_matches;
+  std::vector<Eigen::Vector2d> matched1, matched2;
+  valid_matches.reserve(matches.size());
+  matched1.reserve(matches.size());
+  matched2.reserve(matches.size());
+  for (const FeatureMatch& match : matches) {
+    PARALLAX_CHECK_LT(match.point2D_idx1, points1.size());
+    PARALLAX_CHECK_LT(match.point2D_idx2, points2.size());
+    const Eigen::Vector2d& point1 = points1[match.point2D_idx1];
+    const Eigen::Vector2d& point2 = points2[match.point2D_idx2];
+    if (!point1.allFinite() || !point2.allFinite()) continue;
+    valid_matches.push_back(match);
+    matched1.push_back(point1);
+    matched2.push_back(point2);
+  }
+  const size_t min_num_inliers = std::max<size_t>(static_cast<size_t>(options.min_num_inliers), 1);
+  if (valid_matches.size() < min_num_inliers) return geometry;
+
+  const double num_valid = static_cast<double>(valid_matches.size());
+  const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>
+      F_ransac(MakeRansacOptions(options, options.max_error_px));
+  const auto F_report = F_ransac.Estimate(matched1, matched2);
+  const size_t F_num_inliers = F_report.success ? F_report.num_inliers : 0;
+
+  // E and H only change the classification when they explain a set fraction of F's inliers
+  // (min_E_F_inlier_ratio, max_H_inlier_ratio), so their RANSAC need not search for lower
+  // inlier ratios: on a non-planar scene this cuts H's trials from the cap to a few hundred.
+  const auto raise_min_inlier_ratio = [&](RansacOptions ransac_options, double fraction,
+                                          size_t reference_num_inliers) {
+    ransac_options.min_inlier_ratio =
+        std::max(ransac_options.min_inlier_ratio,
+                 std::min(1.0, fraction * static_cast<double>(reference_num_inliers) / num_valid));
+    return ransac_options;
+  };
+
+  const bool calibrated = options.use_essential_when_calibrated && camera1.has_prior_focal_length &&
+                          camera2.has_prior_focal_length && camera1.VerifyParams() &&
+                          camera2.VerifyParams();
+  RansacReport<Eigen::Matrix3d> E_report;
+  if (calibrated) {
+    std::vector<Eigen::Vector2d> normalized1(matched1.size()), normalized2(matched2.size());
+    for (size_t i = 0; i < matched1.size(); ++i) {
+      normalized1[i] = camera1.CamFromImg(matched1[i]);
+      normalized2[i] = camera2.CamFromImg(matched2[i]);
+    }
+    const double max_error = 0.5 * (camera1.CamFromImgThreshold(options.max_error_px) +
+                                    camera2.CamFromImgThreshold(options.max_error_px));
+    const LoRansac<EssentialMatrixFivePointEstimator, EssentialMatrixEightPointEstimator> E_ransac(
+        raise_min_inlier_ratio(MakeRansacOptions(options, max_error), options.min_E_F_inlier_ratio,
+                               F_num_inliers));
+    E_report = E_ransac.Estimate(normalized1, normalized2);
+  }
+  const size_t E_num_inliers = E_report.success ? E_report.num_inliers : 0;
+
+  // H is compared with E's inliers when E is used, with F's otherwise.
+  const size_t H_reference_num_inliers = E_num_inliers > 0 && F_num_inliers > 0
+                                             ? std::min(E_num_inliers, F_num_inliers)
+                                             : std::max(E_num_inliers, F_num_inliers);
+  const LoRansac<HomographyMatrixEstimator> H_ransac(
+      raise_min_inlier_ratio(MakeRansacOptions(options, options.max_error_px),
+                             options.max_H_inlier_ratio, H_reference_num_inliers));
+  const auto H_report = H_ransac.Estimate(matched1, matched2);
+  const size_t H_num_inliers = H_report.success ? H_report.num_inliers : 0;
+
+  // COLMAP's classification: prefer the calibrated model when E explains (nearly) all of
+  // F's inliers; call the pair planar or panoramic when H explains most of them too.
+  const auto ratio = [](size_t numerator, size_t denominator) {
+    return denominator == 0 ? std::numeric_limits<double>::infinity()
+                            : static_cast<double>(numerator) / static_cast<double>(denominator);
+  };
+  const std::vector<char>* inlier_mask = nullptr;
+  size_t num_inliers = 0;
+  const auto choose = [&](const RansacReport<Eigen::Matrix3d>& report, size_t count) {
+    inlier_mask = &report.inlier_mask;
+    num_inliers = count;
+  };
+  if (E_num_inliers >= min_num_inliers &&
+      ratio(E_num_inliers, F_num_inliers) >= options.min_E_F_inlier_ratio) {
+    if (E_num_inliers >= F_num_inliers) {
+      choose(E_report, E_num_inliers);
+    } else {
+      choose(F_report, F_num_inliers);
+    }
+    if (ratio(H_num_inliers, E_num_inliers) > options.max_H_inlier_ratio) {
+      geometry.config = TwoViewGeometry::kPlanarOrPanoramic;
+      if (H_num_inliers > num_inliers) choose(H_report, H_num_inliers);
+    } else {
+      geometry.config = TwoViewGeometry::kCalibrated;
+    }
+  } else if (F_num_inliers >= min_num_inliers) {
+    choose(F_report, F_num_inliers);
+    if (ratio(H_num_inliers, F_num_inliers) > options.max_H_inlier_ratio) {
+      geometry.config = TwoViewGeometry::kPlanarOrPanoramic;
+      if (H_num_inliers > num_inliers) choose(H_report, H_num_inliers);
+    } else {
+      geometry.config = TwoViewGeometry::kUncalibrated;
+    }
+  } else if (H_num_inliers >= min_num_inliers) {
+    // Only H fits: a plane or a pure rotation, where F is not determined.
+    choose(H_report, H_num_inliers);
+    geometry.config = TwoViewGeometry::kPlanarOrPanoramic;
+  } else {
+    return geometry;
+  }
+
+  // Matches along one line (or on one point) satisfy every model of the family: refuse.
+  if (AreNearlyCollinear(matched1, *inlier_mask, options.max_error_px) ||
+      AreNearlyCollinear(matched2, *inlier_mask, options.max_error_px)) {
+    PARALLAX_LOG(Debug) << "Two-view inliers are collinear: degenerate pair";
+    geometry.config = TwoViewGeometry::kDegenerate;
+    return geometry;
+  }
+
+  if (E_report.success) geometry.E = E_report.model;
+  if (H_report.success) geometry.H = H_report.model;
+  if (F_report.success) {
+    geometry.F = F_report.model;
+  } else if (E_report.success) {
+    geometry.F = FundamentalFromEssential(E_report.model, camera1.CalibrationMatrix(),
+                                          camera2.CalibrationMatrix());
+    geometry.F /= geometry.F.norm();
+  }
+  geometry.inlier_matches.reserve(num_inliers);
+  for (size_t i = 0; i < valid_matches.size(); ++i) {
+    if ((*inlier_mask)[i]) geometry.inlier_matches.push_back(valid_matches[i]);
+  }
+
+  if (DetectWatermark(camera1, matched1, camera2, matched2, *inlier_mask, num_inliers, options)) {
+    geometry.config = TwoViewGeometry::kWatermark;
+    return geometry;
+  }
+  if (!options.compute_relative_pose ||
+      !EstimateTwoViewGeometryPose(camera1, points1, camera2, points2, &geometry)) {
+    return geometry;
+  }
+
+  // In a plane or a pure rotation F (and E for a rotation) is a family, and RANSAC settles on
+  // the member that also collects the most outliers. H is the model there: a panoramic pair
+  // keeps H's inliers; a planar pair keeps H's inliers plus the matches that also fit the
+  // epipolar geometry of the pose from H (points off the plane).
+  const bool panoramic = geometry.config == TwoViewGeometry::kPanoramic;
+  if ((panoramic || geometry.config == TwoViewGeometry::kPlanar) &&
+      H_num_inliers >= min_num_inliers) {
+    std::vector<char> refined_mask = H_report.inlier_mask;
+    if (!panoramic) {
+      const Eigen::Matrix3d F_pose =
+          FundamentalFromEssential(EssentialFromPose(geometry.cam2_from_cam1),
+                                   camera1.CalibrationMatrix(), camera2.CalibrationMatrix());
+      const double max_squared_error = options.max_error_px * options.max_error_px;
+      for (size_t i = 0; i < refined_mask.size(); ++i) {
+        if (!refined_mask[i] && (*inlier_mask)[i] &&
+            ComputeSquaredSampsonError(matched1[i], matched2[i], F_pose) <= max_squared_error) {
+          refined_mask[i] = 1;
+        }
+      }
+    }
+    geometry.inlier_matches.clear();
+    for (size_t i = 0; i < valid_matches.size(); ++i) {
+      if (refined_mask[i]) geometry.inlier_matches.push_back(valid_matches[i]);
+    }
+  }
+  return geometry;
+}
+
+bool EstimateTwoViewGeometryPose(const Camera& camera1, const std::vector<Eigen::Vector2d>& points1,
+                                 const Camera& camera2, const std::vector<Eigen::Vector2d>& points2,
+                                 TwoViewGeometry* geometry) {
+  geometry->tri_angle = 0.0;
+  const int config = geometry->config;
+  const bool epipolar =
+      config == TwoViewGeometry::kCalibrated || config == TwoViewGeometry::kUncalibrated;
+  const bool planar = config == TwoViewGeometry::kPlanar || config == TwoViewGeometry::kPanoramic ||
+                      config == TwoViewGeometry::kPlanarOrPanoramic;
+  if ((!epipolar && !planar) || !camera1.VerifyParams() || !camera2.VerifyParams()) return false;
+
+  std::vector<Eigen::Vector2d> normalized1, normalized2;
+  normalized1.reserve(geometry->inlier_matches.size());
+  normalized2.reserve(geometry->inlier_matches.size());
+  for (const FeatureMatch& match : geometry->inlier_matches) {
+    PARALLAX_CHECK_LT(match.point2D_idx1, points1.size());
+    PARALLAX_CHECK_LT(match.point2D_idx2, points2.size());
+    const Eigen::Vector2d normalized_point1 = camera1.CamFromImg(points1[match.point2D_idx1]);
+    const Eigen::Vector2d normalized_point2 = camera2.CamFromImg(points2[match.point2D_idx2]);
+    if (!normalized_point1.allFinite() || !normalized_point2.allFinite()) continue;
+    normalized1.push_back(normalized_point1);
+    normalized2.push_back(normalized_point2);
+  }
+  if (normalized1.empty()) return false;
+
+  const Eigen::Matrix3d K1 = camera1.CalibrationMatrix();
+  const Eigen::Matrix3d K2 = camera2.CalibrationMatrix();
+  Rigid3d cam2_from_cam1;
+  std::vector<Eigen::Vector3d> points3D;
+  if (epipolar) {
+    const Eigen::Matrix3d E = config == TwoViewGeometry::kCalibrated
+                                  ? geometry->E
+                                  : EssentialFromFundamental(geometry->F, K1, K2);
+    if (!PoseFromEssentialMatrix(E, normalized1, normalized2, &cam2_from_cam1, &points3D)) {
+      return false;
+    }
+  } else {
+    const Eigen::Matrix3d H_calibrated = K2.inverse() * geometry->H * K1;
+    bool panoramic = false;
+    if (!PoseFromCalibratedHomography(H_calibrated, normalized1, normalized2, &cam2_from_cam1,
+                                      &points3D, &panoramic)) {
+      return false;
+    }
+    geometry->config = panoramic ? TwoViewGeometry::kPanoramic : TwoViewGeometry::kPlanar;
+  }
+  geometry->cam2_from_cam1 = cam2_from_cam1;
+
+  if (!points3D.empty()) {
+    const Eigen::Vector3d center1 = Eigen::Vector3d::Zero();
+    const Eigen::Vector3d center2 = ProjectionCenter(cam2_from_cam1);
+    std::vector<double> angles(points3D.size());
+    for (size_t i = 0; i < points3D.size(); ++i) {
+      angles[i] = CalculateTriangulationAngle(center1, center2, points3D[i]);
+    }
+    const auto middle = angles.begin() + static_cast<std::ptrdiff_t>(angles.size() / 2);
+    std::nth_element(angles.begin(), middle, angles.end());
+    geometry->tri_angle = *middle;
+  }
+  return true;
+}
+
+}  // namespace parallax

@@ -1,0 +1,379 @@
+#include "parallax/estimators/two_view_geometry.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <numeric>
+
+#include "parallax/estimators/solvers/fundamental_matrix.h"
+#include "parallax/geometry/triangulation.h"
+#include "parallax/math/random.h"
+#include "parallax/util/check.h"
+
+namespace parallax {
+namespace {
+
+constexpr size_t kWidth = 1024, kHeight = 768;
+
+Eigen::Vector3d RandomUnitVector() {
+  return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
+      .normalized();
+}
+
+enum class Structure { kGeneral, kPlane, kLine };
+
+// Two cameras, keypoints of both images and their matches. Image 2's keypoints are stored in
+// shuffled order with unmatched extras, so match indices are not the identity.
+struct Scene {
+  Camera camera1 = Camera::Create(1, CameraModelId::kSimplePinhole, 1000, kWidth, kHeight);
+  Camera camera2 = Camera::Create(2, CameraModelId::kPinhole, 1100, kWidth, kHeight);
+  Rigid3d cam2_from_cam1;
+  std::vector<Eigen::Vector3d> points3D;  // Per match, in cam1.
+  std::vector<Eigen::Vector2d> points1, points2;
+  FeatureMatches matches;
+  std::vector<char> is_inlier;  // Per match.
+
+  // The true median triangulation angle of the inlier matches.
+  double TrueTriAngle() const {
+    std::vector<double> angles;
+    for (size_t i = 0; i < points3D.size(); ++i) {
+      if (is_inlier[i]) {
+        angles.push_back(CalculateTriangulationAngle(
+            Eigen::Vector3d::Zero(), ProjectionCenter(cam2_from_cam1), points3D[i]));
+      }
+    }
+    std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+    return angles[angles.size() / 2];
+  }
+};
+
+Eigen::Vector2d RandomPixel() {
+  return Eigen::Vector2d(RandomUniformReal(0, kWidth), RandomUniformReal(0, kHeight));
+}
+
+Scene MakeScene(int num_matches, double noise_px, double outlier_ratio, Structure structure,
+                Eigen::Vector3d translation = RandomUnitVector()) {
+  Scene scene;
+  scene.cam2_from_cam1 = Rigid3d(
+      Eigen::Quaterniond(Eigen::AngleAxisd(RandomUniformReal(0.05, 0.3), RandomUnitVector())),
+      translation);
+  const Eigen::Vector3d normal = (Eigen::Vector3d(0, 0, 1) + 0.3 * RandomUnitVector()).normalized();
+  const Eigen::Vector3d line_direction = RandomUnitVector();
+  std::vector<Eigen::Vector2d> matched2;
+  while (static_cast<int>(scene.points3D.size()) < num_matches) {
+    const Eigen::Vector3d ray =
+        scene.camera1.CalibrationMatrix().inverse() * RandomPixel().homogeneous();
+    Eigen::Vector3d point = RandomUniformReal(4, 10) * ray;
+    if (structure == Structure::kPlane) point = ray * 6.0 / normal.dot(ray);
+    if (structure == Structure::kLine) {
+      point = Eigen::Vector3d(0, 0, 6) + RandomUniformReal(-2, 2) * line_direction;
+    }
+    const Eigen::Vector3d in_cam2 = scene.cam2_from_cam1 * point;
+    if (point.z() < 0.5 || in_cam2.z() < 0.5) continue;
+    const Eigen::Vector2d pixel1 = scene.camera1.ImgFromCam(point);
+    const Eigen::Vector2d pixel2 = scene.camera2.ImgFromCam(in_cam2);
+    if (pixel1.x() < 0 || pixel1.x() > kWidth || pixel1.y() < 0 || pixel1.y() > kHeight ||
+        pixel2.x() < 0 || pixel2.x() > kWidth || pixel2.y() < 0 || pixel2.y() > kHeight) {
+      continue;
+    }
+    const bool inlier = RandomUniformReal(0, 1) >= outlier_ratio;
+    scene.points3D.push_back(point);
+    scene.is_inlier.push_back(inlier);
+    scene.points1.push_back(
+        pixel1 + Eigen::Vector2d(RandomGaussian(0, noise_px), RandomGaussian(0, noise_px)));
+    matched2.push_back(inlier
+                           ? Eigen::Vector2d(pixel2 + Eigen::Vector2d(RandomGaussian(0, noise_px),
+                                                                      RandomGaussian(0, noise_px)))
+                           : RandomPixel());
+  }
+  // Shuffle image 2's keypoints and add unmatched ones.
+  std::vector<size_t> order(matched2.size() + 20);
+  std::iota(order.begin(), order.end(), 0);
+  Shuffle(order.size(), &order);
+  scene.points2.resize(order.size());
+  scene.matches.resize(matched2.size());
+  for (size_t slot = 0; slot < order.size(); ++slot) {
+    scene.points2[slot] = order[slot] < matched2.size() ? matched2[order[slot]] : RandomPixel();
+    if (order[slot] < matched2.size()) {
+      scene.matches[order[slot]] = {static_cast<point2D_t>(order[slot]),
+                                    static_cast<point2D_t>(slot)};
+    }
+  }
+  return scene;
+}
+
+struct InlierCounts {
+  size_t inliers_kept = 0, outliers_kept = 0, num_true_inliers = 0;
+};
+
+InlierCounts CountInliers(const Scene& scene, const TwoViewGeometry& geometry) {
+  InlierCounts counts;
+  for (char inlier : scene.is_inlier) counts.num_true_inliers += inlier;
+  for (const FeatureMatch& match : geometry.inlier_matches) {
+    (scene.is_inlier[match.point2D_idx1] ? counts.inliers_kept : counts.outliers_kept)++;
+  }
+  return counts;
+}
+
+void ExpectGoodInliers(const Scene& scene, const TwoViewGeometry& geometry) {
+  const InlierCounts counts = CountInliers(scene, geometry);
+  std::cerr << "kept " << counts.inliers_kept << "/" << counts.num_true_inliers << " inliers, "
+            << counts.outliers_kept << "/" << scene.is_inlier.size() - counts.num_true_inliers
+            << " outliers\n";
+  EXPECT_GE(counts.inliers_kept, 0.95 * counts.num_true_inliers);
+  EXPECT_LE(counts.outliers_kept, 0.01 * geometry.inlier_matches.size());
+}
+
+double TranslationAngleDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI;
+}
+
+// Noisy tests run at 3 sigma of the 0.5 px noise instead of COLMAP's 4 px default: a random
+// outlier within the threshold of its epipolar line cannot be told from an inlier, and at 4 px
+// about 1 % of uniform outliers are.
+TwoViewGeometryOptions NoisyOptions() {
+  TwoViewGeometryOptions options;
+  options.max_error_px = 1.5;
+  return options;
+}
+
+TwoViewGeometry Estimate(const Scene& scene, const TwoViewGeometryOptions& options = {}) {
+  return EstimateTwoViewGeometry(scene.camera1, scene.points1, scene.camera2, scene.points2,
+                                 scene.matches, options);
+}
+
+Scene CalibratedScene(int num_matches, double noise_px, double outlier_ratio,
+                      Structure structure = Structure::kGeneral) {
+  Scene scene = MakeScene(num_matches, noise_px, outlier_ratio, structure);
+  scene.camera1.has_prior_focal_length = true;
+  scene.camera2.has_prior_focal_length = true;
+  return scene;
+}
+
+TEST(EstimateTwoViewGeometry, CalibratedExactRecoversPose) {
+  SetPRNGSeed(1);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Scene scene = CalibratedScene(200, 0.0, 0.0);
+    const TwoViewGeometry geometry = Estimate(scene);
+    ASSERT_EQ(geometry.config, TwoViewGeometry::kCalibrated);
+    EXPECT_EQ(geometry.inlier_matches.size(), scene.matches.size());
+    EXPECT_LT((geometry.cam2_from_cam1.rotation.toRotationMatrix() -
+               scene.cam2_from_cam1.rotation.toRotationMatrix())
+                  .norm(),
+              1e-8);
+    EXPECT_LT((geometry.cam2_from_cam1.translation - scene.cam2_from_cam1.translation).norm(),
+              1e-8);
+    EXPECT_NEAR(geometry.tri_angle, scene.TrueTriAngle(), 1e-8);
+    EXPECT_GT(geometry.F.norm(), 0.0);
+    EXPECT_GT(geometry.H.norm(), 0.0);
+  }
+}
+
+TEST(EstimateTwoViewGeometry, CalibratedNoiseAndOutliers) {
+  SetPRNGSeed(2);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Scene scene = CalibratedScene(1000, 0.5, 0.4);
+    const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
+    ASSERT_EQ(geometry.config, TwoViewGeometry::kCalibrated);
+    ExpectGoodInliers(scene, geometry);
+    EXPECT_LT(RotationAngleDegrees(geometry.cam2_from_cam1.rotation, scene.cam2_from_cam1.rotation),
+              0.2);
+    EXPECT_LT(TranslationAngleDegrees(geometry.cam2_from_cam1.translation,
+                                      scene.cam2_from_cam1.translation),
+              1.0);
+    EXPECT_NEAR(geometry.tri_angle, scene.TrueTriAngle(), 0.02 * scene.TrueTriAngle());
+  }
+}
+
+TEST(EstimateTwoViewGeometry, UncalibratedNoiseAndOutliers) {
+  SetPRNGSeed(3);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Scene scene = MakeScene(1000, 0.5, 0.4, Structure::kGeneral);
+    const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
+    ASSERT_EQ(geometry.config, TwoViewGeometry::kUncalibrated);
+    ExpectGoodInliers(scene, geometry);
+    EXPECT_EQ(geometry.E, Eigen::Matrix3d::Zero());
+    // The intrinsics happen to be right, so the pose from F and K is close.
+    EXPECT_LT(RotationAngleDegrees(geometry.cam2_from_cam1.rotation, scene.cam2_from_cam1.rotation),
+              0.5);
+    EXPECT_LT(TranslationAngleDegrees(geometry.cam2_from_cam1.translation,
+                                      scene.cam2_from_cam1.translation),
+              2.0);
+  }
+  // Priors present but E switched off.
+  const Scene scene = CalibratedScene(300, 0.5, 0.2);
+  TwoViewGeometryOptions options;
+  options.use_essential_when_calibrated = false;
+  EXPECT_EQ(Estimate(scene, options).config, TwoViewGeometry::kUncalibrated);
+}
+
+TEST(EstimateTwoViewGeometry, PlanarSceneIsDetected) {
+  SetPRNGSeed(4);
+  for (const double noise : {0.0, 0.5}) {
+    for (const bool calibrated : {false, true}) {
+      Scene scene = MakeScene(1000, noise, noise > 0 ? 0.4 : 0.0, Structure::kPlane);
+      scene.camera1.has_prior_focal_length = calibrated;
+      scene.camera2.has_prior_focal_length = calibrated;
+      const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
+      EXPECT_EQ(geometry.config, TwoViewGeometry::kPlanar)
+          << "noise " << noise << " calibrated " << calibrated;
+      ExpectGoodInliers(scene, geometry);
+      EXPECT_GT(geometry.tri_angle, 0.0);
+      EXPECT_NEAR(geometry.cam2_from_cam1.translation.norm(), 1.0, 1e-9);
+    }
+  }
+}
+
+TEST(EstimateTwoViewGeometry, PureRotationIsPanoramic) {
+  SetPRNGSeed(5);
+  for (const double noise : {0.0, 0.5}) {
+    Scene scene =
+        MakeScene(1000, noise, noise > 0 ? 0.4 : 0.0, Structure::kGeneral, Eigen::Vector3d::Zero());
+    scene.camera1.has_prior_focal_length = true;
+    scene.camera2.has_prior_focal_length = true;
+    // A panoramic pair keeps H's inliers, whose transfer error carries the noise of both
+    // images (sigma sqrt(2) per axis): 1.5 px would drop ~10 % of them, 2 px drops ~2 %.
+    TwoViewGeometryOptions options = NoisyOptions();
+    options.max_error_px = 2.0;
+    const TwoViewGeometry geometry = Estimate(scene, options);
+    ASSERT_EQ(geometry.config, TwoViewGeometry::kPanoramic) << "noise " << noise;
+    ExpectGoodInliers(scene, geometry);
+    EXPECT_LT(RotationAngleDegrees(geometry.cam2_from_cam1.rotation, scene.cam2_from_cam1.rotation),
+              0.1);
+    EXPECT_EQ(geometry.cam2_from_cam1.translation, Eigen::Vector3d::Zero());
+    EXPECT_EQ(geometry.tri_angle, 0.0);
+  }
+}
+
+TEST(EstimateTwoViewGeometry, TooFewMatchesIsDegenerate) {
+  SetPRNGSeed(6);
+  const Scene scene = CalibratedScene(10, 0.0, 0.0);
+  TwoViewGeometry geometry = Estimate(scene);
+  EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
+  EXPECT_TRUE(geometry.inlier_matches.empty());
+  geometry = EstimateTwoViewGeometry(scene.camera1, {}, scene.camera2, {}, {}, {});
+  EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
+  EXPECT_TRUE(geometry.inlier_matches.empty());
+  // Enough matches, too few of them consistent.
+  const Scene outliers = CalibratedScene(40, 0.5, 0.95);
+  geometry = Estimate(outliers);
+  EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
+  EXPECT_TRUE(geometry.inlier_matches.empty());
+}
+
+TEST(EstimateTwoViewGeometry, NonFiniteKeypointsAreIgnored) {
+  SetPRNGSeed(7);
+  Scene scene = CalibratedScene(300, 0.5, 0.2);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<size_t> poisoned;
+  for (size_t i = 0; i < scene.matches.size(); i += 6) {
+    scene.points1[scene.matches[i].point2D_idx1] =
+        (i % 4 == 0) ? Eigen::Vector2d(nan, 1) : Eigen::Vector2d(1, inf);
+    poisoned.push_back(i);
+  }
+  const TwoViewGeometry geometry = Estimate(scene);
+  EXPECT_EQ(geometry.config, TwoViewGeometry::kCalibrated);
+  for (const FeatureMatch& match : geometry.inlier_matches) {
+    EXPECT_TRUE(scene.points1[match.point2D_idx1].allFinite());
+  }
+  // Every keypoint non-finite.
+  for (Eigen::Vector2d& point : scene.points1) point = Eigen::Vector2d(nan, -inf);
+  const TwoViewGeometry none = Estimate(scene);
+  EXPECT_EQ(none.config, TwoViewGeometry::kDegenerate);
+  EXPECT_TRUE(none.inlier_matches.empty());
+}
+
+TEST(EstimateTwoViewGeometry, DuplicateAndCollinearPointsAreDegenerate) {
+  SetPRNGSeed(8);
+  // All matches between one pair of points.
+  Scene scene = CalibratedScene(100, 0.0, 0.0);
+  for (Eigen::Vector2d& point : scene.points1) point = Eigen::Vector2d(100, 200);
+  for (Eigen::Vector2d& point : scene.points2) point = Eigen::Vector2d(300, 400);
+  for (const bool calibrated : {false, true}) {
+    scene.camera1.has_prior_focal_length = calibrated;
+    const TwoViewGeometry geometry = Estimate(scene);
+    EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
+    EXPECT_TRUE(geometry.inlier_matches.empty());
+  }
+  // 3D points on one line, exact and noisy.
+  for (const double noise : {0.0, 0.5}) {
+    for (const bool calibrated : {false, true}) {
+      Scene line = MakeScene(200, noise, 0.0, Structure::kLine);
+      line.camera1.has_prior_focal_length = calibrated;
+      line.camera2.has_prior_focal_length = calibrated;
+      const TwoViewGeometry geometry = Estimate(line);
+      EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate)
+          << "noise " << noise << " calibrated " << calibrated;
+      EXPECT_TRUE(geometry.inlier_matches.empty());
+    }
+  }
+  // Half of a good scene duplicated: still verified.
+  Scene duplicated = CalibratedScene(200, 0.5, 0.0);
+  const size_t num_matches = duplicated.matches.size();
+  for (size_t i = 0; i < num_matches; i += 2) duplicated.matches.push_back(duplicated.matches[i]);
+  duplicated.is_inlier.resize(duplicated.matches.size(), 1);
+  const TwoViewGeometry geometry = Estimate(duplicated);
+  EXPECT_EQ(geometry.config, TwoViewGeometry::kCalibrated);
+  EXPECT_GE(geometry.inlier_matches.size(), 0.95 * duplicated.matches.size());
+}
+
+TEST(EstimateTwoViewGeometry, WatermarkIsDetected) {
+  SetPRNGSeed(9);
+  // A logo in the bottom-left corner at the same place in both images, a few scene matches.
+  Scene scene = CalibratedScene(20, 0.5, 0.0);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector2d logo(RandomUniformReal(5, 90),
+                               RandomUniformReal(kHeight - 70, kHeight - 5));
+    scene.points1.push_back(logo);
+    scene.points2.push_back(logo + Eigen::Vector2d(RandomGaussian(0, 0.3), RandomGaussian(0, 0.3)));
+    scene.matches.push_back({static_cast<point2D_t>(scene.points1.size() - 1),
+                             static_cast<point2D_t>(scene.points2.size() - 1)});
+  }
+  const TwoViewGeometry geometry = Estimate(scene);
+  EXPECT_EQ(geometry.config, TwoViewGeometry::kWatermark);
+}
+
+TEST(EstimateTwoViewGeometry, RejectsBadOptionsAndIndices) {
+  SetPRNGSeed(10);
+  const Scene scene = CalibratedScene(50, 0.0, 0.0);
+  TwoViewGeometryOptions options;
+  options.max_error_px = 0.0;
+  EXPECT_THROW(Estimate(scene, options), CheckError);
+  options = {};
+  options.confidence = 1.0;
+  EXPECT_THROW(Estimate(scene, options), CheckError);
+  FeatureMatches matches = scene.matches;
+  matches[3].point2D_idx2 = static_cast<point2D_t>(scene.points2.size());
+  EXPECT_THROW(EstimateTwoViewGeometry(scene.camera1, scene.points1, scene.camera2, scene.points2,
+                                       matches, {}),
+               CheckError);
+}
+
+TEST(EstimateTwoViewGeometryPose, FromFundamentalAndRefusals) {
+  SetPRNGSeed(11);
+  const Scene scene = MakeScene(300, 0.0, 0.0, Structure::kGeneral);
+  TwoViewGeometryOptions options;
+  options.compute_relative_pose = false;
+  TwoViewGeometry geometry = Estimate(scene, options);
+  ASSERT_EQ(geometry.config, TwoViewGeometry::kUncalibrated);
+  EXPECT_EQ(geometry.tri_angle, 0.0);
+  ASSERT_TRUE(EstimateTwoViewGeometryPose(scene.camera1, scene.points1, scene.camera2,
+                                          scene.points2, &geometry));
+  EXPECT_LT(RotationAngleDegrees(geometry.cam2_from_cam1.rotation, scene.cam2_from_cam1.rotation),
+            1e-6);
+  EXPECT_NEAR(geometry.tri_angle, scene.TrueTriAngle(), 1e-6);
+  geometry.config = TwoViewGeometry::kDegenerate;
+  EXPECT_FALSE(EstimateTwoViewGeometryPose(scene.camera1, scene.points1, scene.camera2,
+                                           scene.points2, &geometry));
+  geometry.config = TwoViewGeometry::kUncalibrated;
+  geometry.inlier_matches.clear();
+  EXPECT_FALSE(EstimateTwoViewGeometryPose(scene.camera1, scene.points1, scene.camera2,
+                                           scene.points2, &geometry));
+}
+
+}  // namespace
+}  // namespace parallax

@@ -1,0 +1,179 @@
+#include "parallax/pipeline/camera_setup.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "parallax/util/check.h"
+#include "parallax/util/file.h"
+#include "parallax/util/logging.h"
+
+namespace parallax {
+namespace {
+
+// Parses one number in full; nullopt for trailing garbage, NaN or infinity.
+std::optional<double> ParseDouble(const std::string& token) {
+  if (token.empty()) return std::nullopt;
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value)) {
+    return std::nullopt;
+  }
+  return value;
+}
+
+bool SameCamera(const Camera& a, const Camera& b) {
+  return a.model_id == b.model_id && a.width == b.width && a.height == b.height &&
+         a.params == b.params && a.has_prior_focal_length == b.has_prior_focal_length;
+}
+
+}  // namespace
+
+void CameraSetupOptions::Check() const {
+  PARALLAX_CHECK_MSG(!(single_camera && camera_per_image),
+                     "single_camera and camera_per_image exclude each other");
+  PARALLAX_CHECK_GT(default_focal_length_factor, 0.0);
+}
+
+Eigen::Matrix3d ReadCalibrationMatrix(const std::filesystem::path& path) {
+  std::string text = ReadFileToString(path);
+  for (char& c : text) {
+    if (c == ',' || c == ';' || c == '[' || c == ']') c = ' ';
+  }
+  std::istringstream stream(text);
+  std::vector<double> values;
+  std::string token;
+  while (stream >> token) {
+    const std::optional<double> value = ParseDouble(token);
+    if (!value) throw InputError(path.string() + ": '" + token + "' is not a number");
+    values.push_back(*value);
+  }
+  if (values.size() != 9) {
+    throw InputError(path.string() + ": expected a 3x3 matrix (9 numbers), found " +
+                     std::to_string(values.size()) + " numbers");
+  }
+  Eigen::Matrix3d K = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(values.data());
+  if (K(2, 2) == 0 || std::abs(K(1, 0)) > 1e-9 * std::abs(K(2, 2)) || K(2, 0) != 0 ||
+      K(2, 1) != 0) {
+    throw InputError(path.string() +
+                     ": not a calibration matrix (expected [fx s cx; 0 fy cy; 0 0 1])");
+  }
+  K /= K(2, 2);
+  if (K(0, 0) <= 0 || K(1, 1) <= 0) {
+    throw InputError(path.string() + ": focal lengths must be positive");
+  }
+  if (std::abs(K(0, 1)) > 1e-6 * K(0, 0)) {
+    PARALLAX_LOG(Warning) << path.string() << ": skew " << K(0, 1)
+                          << " is ignored (COLMAP's camera models have none)";
+  }
+  return K;
+}
+
+std::vector<double> ParseCameraParams(const std::string& text) {
+  std::vector<double> params;
+  std::stringstream stream(text);
+  std::string token;
+  while (std::getline(stream, token, ',')) {
+    const std::optional<double> value = ParseDouble(Trim(token));
+    if (!value) throw InputError("--camera-params: '" + Trim(token) + "' is not a number");
+    params.push_back(*value);
+  }
+  if (params.empty()) throw InputError("--camera-params: no values in '" + text + "'");
+  return params;
+}
+
+CameraModelId SelectedCameraModel(const CameraSetupOptions& options, bool intrinsics_known) {
+  if (options.camera_model.empty()) {
+    return intrinsics_known ? CameraModelId::kPinhole : CameraModelId::kSimpleRadial;
+  }
+  const CameraModelId model_id = CameraModelIdFromName(options.camera_model);
+  if (model_id == CameraModelId::kInvalid) {
+    throw InputError("--camera-model: unknown camera model '" + options.camera_model +
+                     "' (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV)");
+  }
+  return model_id;
+}
+
+Camera MakeCamera(const CameraSetupOptions& options, const std::optional<Eigen::Matrix3d>& K,
+                  size_t width, size_t height) {
+  PARALLAX_CHECK(width > 0 && height > 0);
+  const CameraModelId model_id =
+      SelectedCameraModel(options, K.has_value() || !options.camera_params.empty());
+  Camera camera;
+  camera.model_id = model_id;
+  camera.width = width;
+  camera.height = height;
+  if (!options.camera_params.empty()) {
+    const int num_params = CameraModelNumParams(model_id);
+    if (static_cast<int>(options.camera_params.size()) != num_params) {
+      throw InputError("--camera-params: " + std::to_string(options.camera_params.size()) +
+                       " values, but " + CameraModelName(model_id) + " takes " +
+                       std::to_string(num_params) + " (choose the model with --camera-model)");
+    }
+    camera.params = options.camera_params;
+    camera.has_prior_focal_length = true;
+    if (!camera.VerifyParams()) {
+      throw InputError("--camera-params: focal lengths must be positive and finite");
+    }
+    return camera;
+  }
+  if (K) {
+    const double fx = (*K)(0, 0), fy = (*K)(1, 1);
+    camera.params = CameraModelInitialParams(model_id, 0.5 * (fx + fy), (*K)(0, 2), (*K)(1, 2));
+    const std::vector<int> focal_idxs = CameraModelFocalIdxs(model_id);
+    if (focal_idxs.size() == 2) {
+      camera.params[focal_idxs[0]] = fx;
+      camera.params[focal_idxs[1]] = fy;
+    }
+    camera.has_prior_focal_length = true;
+    return camera;
+  }
+  const double focal_length =
+      options.default_focal_length_factor * static_cast<double>(std::max(width, height));
+  camera.params = CameraModelInitialParams(model_id, focal_length, width / 2.0, height / 2.0);
+  camera.has_prior_focal_length = false;
+  return camera;
+}
+
+CameraAssigner::CameraAssigner(const CameraSetupOptions& options, Database* database)
+    : options_(options), database_(database) {
+  options_.Check();
+  PARALLAX_CHECK(database != nullptr);
+  SelectedCameraModel(options_, false);  // Reject an unknown model before any work.
+  if (!options_.intrinsics_path.empty()) K_ = ReadCalibrationMatrix(options_.intrinsics_path);
+}
+
+camera_t CameraAssigner::CameraForImage(const std::string& image_name, size_t width,
+                                        size_t height) {
+  const Camera wanted = MakeCamera(options_, K_, width, height);
+  if (options_.camera_per_image) return database_->WriteCamera(wanted);
+
+  if (options_.single_camera && single_camera_id_) {
+    const auto& [size, camera_id] = *camera_by_size_.begin();
+    if (size != std::make_pair(width, height)) {
+      throw InputError(image_name + ": image is " + std::to_string(width) + "x" +
+                       std::to_string(height) + " but the single camera is " +
+                       std::to_string(size.first) + "x" + std::to_string(size.second));
+    }
+    return camera_id;
+  }
+  const auto it = camera_by_size_.find({width, height});
+  if (it != camera_by_size_.end()) return it->second;
+
+  // A camera left by an earlier (interrupted) run with exactly these settings is reused.
+  camera_t camera_id = kInvalidCameraId;
+  for (const Camera& camera : database_->ReadAllCameras()) {
+    if (SameCamera(camera, wanted)) {
+      camera_id = camera.camera_id;
+      break;
+    }
+  }
+  if (camera_id == kInvalidCameraId) camera_id = database_->WriteCamera(wanted);
+  camera_by_size_[{width, height}] = camera_id;
+  if (options_.single_camera) single_camera_id_ = camera_id;
+  return camera_id;
+}
+
+}  // namespace parallax

@@ -1,0 +1,148 @@
+#include "parallax/pipeline/feature_extraction.h"
+
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include "parallax/util/check.h"
+#include "parallax/util/logging.h"
+#include "parallax/util/progress.h"
+#include "parallax/util/threading.h"
+#include "parallax/util/timer.h"
+
+namespace parallax {
+namespace {
+
+// One image to extract: its file, database name and row (when the row exists already but
+// its features do not, e.g. a database prepared by another tool).
+struct ExtractionJob {
+  std::filesystem::path path;
+  std::string name;
+  std::optional<image_t> image_id;
+};
+
+struct ExtractionResult {
+  std::string error;  // Empty on success.
+  size_t width = 0;
+  size_t height = 0;
+  FeatureKeypoints keypoints;
+  FeatureDescriptors descriptors;
+};
+
+ExtractionResult ExtractImage(const ExtractionJob& job, const FeatureExtractionOptions& options) {
+  ExtractionResult result;
+  try {
+    const Bitmap bitmap = ReadBitmap(job.path, options.reader);
+    result.width = static_cast<size_t>(bitmap.Width());
+    result.height = static_cast<size_t>(bitmap.Height());
+    // An extractor per image: cheap to create, and no state is shared between threads.
+    CreateSiftExtractor(options.sift)->Extract(bitmap.gray, &result.keypoints, &result.descriptors);
+  } catch (const CheckError&) {
+    throw;  // A bug, not a bad file.
+  } catch (const std::exception& error) {
+    // ReadBitmap's InputError already starts with the path; OpenCV's errors do not.
+    const std::string message = error.what();
+    result.error =
+        message.rfind(job.path.string(), 0) == 0 ? message : job.path.string() + ": " + message;
+  }
+  return result;
+}
+
+}  // namespace
+
+void FeatureExtractionOptions::Check() const {
+  sift.Check();
+  reader.Check();
+  camera.Check();
+}
+
+FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
+                                       const std::filesystem::path& image_dir, Database* database) {
+  options.Check();
+  PARALLAX_CHECK(database != nullptr);
+  const Timer timer;
+  FeatureExtractionStats stats;
+
+  const std::vector<std::filesystem::path> paths = ListImageFiles(image_dir);
+  stats.num_images_found = paths.size();
+  CameraAssigner camera_assigner(options.camera, database);
+
+  std::vector<ExtractionJob> jobs;
+  for (const std::filesystem::path& path : paths) {
+    ExtractionJob job{path, path.filename().string(),
+                      database->ImageIdByName(path.filename().string())};
+    if (job.image_id && database->ExistsKeypoints(*job.image_id) &&
+        database->ExistsDescriptors(*job.image_id)) {
+      ++stats.num_skipped;
+      continue;
+    }
+    jobs.push_back(std::move(job));
+  }
+  PARALLAX_LOG(Info) << "Feature extraction: " << paths.size() << " images in "
+                     << image_dir.string() << ", " << stats.num_skipped
+                     << " already in the database, " << jobs.size() << " to extract";
+
+  // Results are written in job order (deterministic image ids) as soon as all earlier jobs
+  // are done; the writes are serialised by the mutex, one transaction per image.
+  std::mutex mutex;
+  std::vector<std::unique_ptr<ExtractionResult>> results(jobs.size());
+  size_t next_to_write = 0;
+  size_t total_keypoints = 0;
+  ProgressReporter progress("features", jobs.size());
+
+  const auto write_result = [&](size_t index) {
+    const ExtractionJob& job = jobs[index];
+    const ExtractionResult& result = *results[index];
+    if (!result.error.empty()) {
+      PARALLAX_LOG(Warning) << "skipping " << result.error;
+      stats.failed.emplace_back(job.name, result.error);
+      return;
+    }
+    if (job.image_id) {
+      // The row exists; add what is missing (each write is atomic on its own).
+      if (!database->ExistsKeypoints(*job.image_id)) {
+        database->WriteKeypoints(*job.image_id, result.keypoints);
+      }
+      if (!database->ExistsDescriptors(*job.image_id)) {
+        database->WriteDescriptors(*job.image_id, result.descriptors);
+      }
+    } else {
+      camera_t camera_id = kInvalidCameraId;
+      try {
+        camera_id = camera_assigner.CameraForImage(job.path.string(), result.width, result.height);
+      } catch (const InputError& error) {
+        PARALLAX_LOG(Warning) << "skipping " << error.what();
+        stats.failed.emplace_back(job.name, error.what());
+        return;
+      }
+      database->WriteImageWithFeatures(job.name, camera_id, result.keypoints, result.descriptors);
+    }
+    ++stats.num_extracted;
+    total_keypoints += result.keypoints.size();
+    PARALLAX_LOG(Debug) << job.name << ": " << result.keypoints.size() << " keypoints";
+  };
+
+  ParallelFor(0, jobs.size(), options.num_threads, [&](size_t index) {
+    auto result = std::make_unique<ExtractionResult>(ExtractImage(jobs[index], options));
+    std::lock_guard<std::mutex> lock(mutex);
+    results[index] = std::move(result);
+    while (next_to_write < jobs.size() && results[next_to_write] != nullptr) {
+      write_result(next_to_write);
+      results[next_to_write].reset(new ExtractionResult());  // Free the features, keep "done".
+      ++next_to_write;
+    }
+    progress.Increment();
+  });
+  progress.Finish();
+
+  stats.mean_num_keypoints =
+      stats.num_extracted > 0 ? static_cast<double>(total_keypoints) / stats.num_extracted : 0.0;
+  stats.seconds = timer.ElapsedSeconds();
+  PARALLAX_LOG(Info) << "Feature extraction: " << stats.num_extracted << " extracted, "
+                     << stats.num_skipped << " skipped, " << stats.failed.size() << " failed, mean "
+                     << static_cast<long>(stats.mean_num_keypoints + 0.5) << " keypoints, "
+                     << stats.seconds << " s";
+  return stats;
+}
+
+}  // namespace parallax

@@ -1,0 +1,43 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "parallax/feature/image_reader.h"
+#include "parallax/feature/sift.h"
+#include "parallax/pipeline/camera_setup.h"
+#include "parallax/scene/database.h"
+
+namespace parallax {
+
+struct FeatureExtractionOptions {
+  SiftExtractionOptions sift;  // Detector and descriptor settings.
+  ImageReaderOptions reader;   // Decoding limits.
+  CameraSetupOptions camera;   // How cameras are assigned to images.
+  int num_threads = -1;        // Images extracted in parallel; -1: all cores.
+  void Check() const;
+};
+
+struct FeatureExtractionStats {
+  size_t num_images_found = 0;  // Image files in the folder.
+  size_t num_extracted = 0;     // Extracted and written in this run.
+  size_t num_skipped = 0;       // Already in the database with features (resumed run).
+  // (image name, reason) of files that could not be read or extracted.
+  std::vector<std::pair<std::string, std::string>> failed;
+  double mean_num_keypoints = 0;  // Over the images extracted in this run.
+  double seconds = 0;
+};
+
+// Stage 1: detects SIFT features in every image of `image_dir` (not recursive; files found
+// by content) and writes image rows, keypoints and descriptors to `database`, one
+// transaction per image, so a killed run resumes where it stopped: images already in the
+// database with features are skipped. Unreadable files are logged (one warning each) and
+// skipped. Images are processed in parallel and written in name order, so image ids are
+// deterministic. Throws InputError for a missing folder or intrinsics file, or a database
+// that cannot be written.
+FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
+                                       const std::filesystem::path& image_dir, Database* database);
+
+}  // namespace parallax

@@ -1,0 +1,253 @@
+#include "parallax/pipeline/feature_matching.h"
+
+#include <algorithm>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "parallax/math/random.h"
+#include "parallax/util/check.h"
+#include "parallax/util/logging.h"
+#include "parallax/util/progress.h"
+#include "parallax/util/threading.h"
+#include "parallax/util/timer.h"
+
+namespace parallax {
+namespace {
+
+// What matching and verification need of one image, loaded once per batch that uses it.
+struct ImageFeatures {
+  MatchableDescriptors descriptors;
+  std::vector<Eigen::Vector2d> points;  // Keypoints as stored (pixel centres at +0.5).
+};
+
+struct PairJob {
+  image_t image_id1;
+  image_t image_id2;
+  bool has_matches;        // Matches stored by an earlier run: verify those.
+  FeatureMatches matches;  // Putative matches (read or computed).
+  TwoViewGeometry geometry;
+  double matching_seconds = 0;
+  double verification_seconds = 0;
+};
+
+bool IsVerified(const TwoViewGeometry& geometry) {
+  return geometry.config != TwoViewGeometry::kUndefined &&
+         geometry.config != TwoViewGeometry::kDegenerate && !geometry.inlier_matches.empty();
+}
+
+}  // namespace
+
+std::optional<PairMode> PairModeFromName(const std::string& name) {
+  if (name == "exhaustive") return PairMode::kExhaustive;
+  if (name == "sequential") return PairMode::kSequential;
+  return std::nullopt;
+}
+
+void FeatureMatchingPipelineOptions::Check() const {
+  matching.Check();
+  geometry.Check();
+  PARALLAX_CHECK_GT(sequential_overlap, 0);
+  PARALLAX_CHECK_GT(batch_size, 0);
+  PARALLAX_CHECK_GT(block_size, 0);
+}
+
+std::vector<std::pair<image_t, image_t>> ExhaustivePairs(const std::vector<image_t>& image_ids,
+                                                         int block_size) {
+  PARALLAX_CHECK_GT(block_size, 0);
+  const size_t n = image_ids.size();
+  const size_t block = static_cast<size_t>(block_size);
+  std::vector<std::pair<image_t, image_t>> pairs;
+  pairs.reserve(n * (n - std::min<size_t>(n, 1)) / 2);
+  // Block by block, so that consecutive pairs share their images.
+  for (size_t start1 = 0; start1 < n; start1 += block) {
+    for (size_t start2 = start1; start2 < n; start2 += block) {
+      for (size_t i = start1; i < std::min(n, start1 + block); ++i) {
+        for (size_t j = std::max(start2, i + 1); j < std::min(n, start2 + block); ++j) {
+          pairs.emplace_back(image_ids[i], image_ids[j]);
+        }
+      }
+    }
+  }
+  return pairs;
+}
+
+std::vector<std::pair<image_t, image_t>> SequentialPairs(const std::vector<image_t>& image_ids,
+                                                         int overlap) {
+  PARALLAX_CHECK_GT(overlap, 0);
+  std::vector<std::pair<image_t, image_t>> pairs;
+  for (size_t i = 0; i < image_ids.size(); ++i) {
+    for (size_t j = i + 1; j < std::min(image_ids.size(), i + 1 + overlap); ++j) {
+      pairs.emplace_back(image_ids[i], image_ids[j]);
+    }
+  }
+  return pairs;
+}
+
+FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& options,
+                                    Database* database) {
+  options.Check();
+  PARALLAX_CHECK(database != nullptr);
+  const Timer timer;
+  FeatureMatchingStats stats;
+
+  std::vector<Image> images = database->ReadAllImages();
+  std::sort(images.begin(), images.end(),
+            [](const Image& a, const Image& b) { return a.name < b.name; });
+  std::vector<image_t> image_ids;
+  std::unordered_map<image_t, camera_t> camera_of_image;
+  for (const Image& image : images) {
+    if (!database->ExistsKeypoints(image.image_id) ||
+        !database->ExistsDescriptors(image.image_id)) {
+      PARALLAX_LOG(Warning) << database->Path().string() << ": image " << image.name
+                            << " has no features; not matched";
+      continue;
+    }
+    image_ids.push_back(image.image_id);
+    camera_of_image[image.image_id] = image.camera_id;
+  }
+  std::unordered_map<camera_t, Camera> cameras;
+  for (Camera& camera : database->ReadAllCameras()) cameras[camera.camera_id] = std::move(camera);
+  for (const auto& [image_id, camera_id] : camera_of_image) {
+    if (cameras.count(camera_id) == 0) {
+      throw InputError(database->Path().string() + ": image " + std::to_string(image_id) +
+                       " refers to missing camera " + std::to_string(camera_id));
+    }
+  }
+
+  const std::vector<std::pair<image_t, image_t>> all_pairs =
+      options.pair_mode == PairMode::kExhaustive
+          ? ExhaustivePairs(image_ids, options.block_size)
+          : SequentialPairs(image_ids, options.sequential_overlap);
+  stats.num_pairs = all_pairs.size();
+  std::vector<std::pair<image_t, image_t>> pairs;
+  for (const auto& pair : all_pairs) {
+    if (database->ExistsTwoViewGeometry(pair.first, pair.second)) {
+      ++stats.num_skipped;
+    } else {
+      pairs.push_back(pair);
+    }
+  }
+  PARALLAX_LOG(Info) << "Matching: " << image_ids.size() << " images, " << all_pairs.size()
+                     << (options.pair_mode == PairMode::kExhaustive ? " exhaustive" : " sequential")
+                     << " pairs, " << stats.num_skipped << " already verified, " << pairs.size()
+                     << " to match";
+
+  // Each pair runs on one thread; the parallelism is over pairs.
+  FeatureMatchingOptions matching_options = options.matching;
+  matching_options.num_threads = 1;
+  const size_t cache_capacity = 2 * static_cast<size_t>(options.block_size);
+  std::unordered_map<image_t, ImageFeatures> cache;
+  ProgressReporter progress("matching", pairs.size());
+
+  for (size_t batch_start = 0; batch_start < pairs.size(); batch_start += options.batch_size) {
+    const size_t batch_end = std::min(pairs.size(), batch_start + options.batch_size);
+
+    // Load the images this batch needs (database reads are sequential; preparing the
+    // descriptors is parallel).
+    std::vector<image_t> needed;
+    std::unordered_set<image_t> needed_set;
+    for (size_t k = batch_start; k < batch_end; ++k) {
+      for (image_t image_id : {pairs[k].first, pairs[k].second}) {
+        if (needed_set.insert(image_id).second) needed.push_back(image_id);
+      }
+    }
+    std::vector<image_t> missing;
+    for (image_t image_id : needed) {
+      if (cache.count(image_id) == 0) missing.push_back(image_id);
+    }
+    if (cache.size() + missing.size() > cache_capacity) {
+      for (auto it = cache.begin(); it != cache.end();) {
+        it = needed_set.count(it->first) > 0 ? std::next(it) : cache.erase(it);
+      }
+    }
+    std::vector<FeatureDescriptors> raw_descriptors(missing.size());
+    for (size_t m = 0; m < missing.size(); ++m) {
+      ImageFeatures& features = cache[missing[m]];
+      const FeatureKeypoints keypoints = database->ReadKeypoints(missing[m]);
+      features.points.reserve(keypoints.size());
+      for (const FeatureKeypoint& keypoint : keypoints) {
+        features.points.emplace_back(keypoint.x, keypoint.y);
+      }
+      raw_descriptors[m] = database->ReadDescriptors(missing[m]);
+      if (static_cast<size_t>(raw_descriptors[m].rows()) != keypoints.size()) {
+        throw InputError(database->Path().string() + ": image " + std::to_string(missing[m]) +
+                         " has " + std::to_string(keypoints.size()) + " keypoints but " +
+                         std::to_string(raw_descriptors[m].rows()) + " descriptors");
+      }
+    }
+    ParallelFor(0, missing.size(), options.num_threads, [&](size_t m) {
+      cache.at(missing[m]).descriptors = PrepareDescriptors(raw_descriptors[m]);
+    });
+    raw_descriptors.clear();
+
+    std::vector<PairJob> jobs(batch_end - batch_start);
+    for (size_t k = 0; k < jobs.size(); ++k) {
+      PairJob& job = jobs[k];
+      job.image_id1 = pairs[batch_start + k].first;
+      job.image_id2 = pairs[batch_start + k].second;
+      job.has_matches = database->ExistsMatches(job.image_id1, job.image_id2);
+      if (job.has_matches) job.matches = database->ReadMatches(job.image_id1, job.image_id2);
+    }
+
+    ParallelFor(0, jobs.size(), options.num_threads, [&](size_t k) {
+      PairJob& job = jobs[k];
+      const ImageFeatures& features1 = cache.at(job.image_id1);
+      const ImageFeatures& features2 = cache.at(job.image_id2);
+      Timer pair_timer;
+      if (!job.has_matches) {
+        job.matches =
+            MatchDescriptors(features1.descriptors, features2.descriptors, matching_options);
+      }
+      job.matching_seconds = pair_timer.ElapsedSeconds();
+      pair_timer.Restart();
+      if (static_cast<int>(job.matches.size()) < options.geometry.min_num_inliers) {
+        // Too few to verify: recorded as degenerate so a resumed run does not retry it.
+        job.geometry.config = TwoViewGeometry::kDegenerate;
+      } else {
+        // RANSAC draws from the thread's generator: seeding it by pair makes the result
+        // independent of which thread runs the pair; the caller's stream is restored.
+        const std::mt19937_64 saved_prng = ThreadLocalPRNG();
+        SetPRNGSeed(ImagePairToPairId(job.image_id1, job.image_id2));
+        job.geometry =
+            EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)), features1.points,
+                                    cameras.at(camera_of_image.at(job.image_id2)), features2.points,
+                                    job.matches, options.geometry);
+        ThreadLocalPRNG() = saved_prng;
+      }
+      job.verification_seconds = pair_timer.ElapsedSeconds();
+      progress.Increment();
+    });
+
+    database->BeginTransaction();
+    for (const PairJob& job : jobs) {
+      if (!job.has_matches) database->WriteMatches(job.image_id1, job.image_id2, job.matches);
+      database->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
+    }
+    database->EndTransaction();
+
+    for (const PairJob& job : jobs) {
+      PairMatchStats pair_stats;
+      pair_stats.image_id1 = job.image_id1;
+      pair_stats.image_id2 = job.image_id2;
+      pair_stats.num_putative = static_cast<int>(job.matches.size());
+      pair_stats.num_inliers = static_cast<int>(job.geometry.inlier_matches.size());
+      pair_stats.config = job.geometry.config;
+      stats.pairs.push_back(pair_stats);
+      ++stats.num_matched;
+      stats.matching_thread_seconds += job.matching_seconds;
+      stats.verification_thread_seconds += job.verification_seconds;
+      if (IsVerified(job.geometry)) ++stats.num_verified;
+    }
+  }
+  progress.Finish();
+
+  stats.seconds = timer.ElapsedSeconds();
+  PARALLAX_LOG(Info) << "Matching: " << stats.num_matched << " pairs matched, "
+                     << stats.num_verified << " verified, " << stats.num_skipped << " skipped, "
+                     << stats.seconds << " s (thread time: matching "
+                     << stats.matching_thread_seconds << " s, verification "
+                     << stats.verification_thread_seconds << " s)";
+  return stats;
+}
+
+}  // namespace parallax

@@ -1,0 +1,223 @@
+#include "parallax/pipeline/feature_matching.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <set>
+
+#include "parallax/math/random.h"
+
+namespace parallax {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A database with exact ground truth: `num_images` cameras on an arc looking at a cloud of
+// points; every image observes every point (in a shuffled keypoint order) with the point's
+// descriptor, plus `num_clutter` keypoints with random descriptors.
+class FeatureMatchingTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("parallax_feature_matching_test_" + std::to_string(getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  void MakeScene(Database* database, int num_images, int num_points, int num_clutter) {
+    std::vector<Eigen::Vector3d> points(num_points);
+    FeatureDescriptors point_descriptors(num_points, 128);
+    for (int j = 0; j < num_points; ++j) {
+      points[j] = Eigen::Vector3d(RandomUniformReal(-1, 1), RandomUniformReal(-1, 1),
+                                  RandomUniformReal(-1, 1));
+      for (int d = 0; d < 128; ++d) {
+        point_descriptors(j, d) = static_cast<uint8_t>(RandomUniformInteger(0, 255));
+      }
+    }
+    const Camera camera = Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 800, 640, 480);
+    const camera_t camera_id = database->WriteCamera(camera);
+    point_of_keypoint_.assign(num_images + 1, {});
+    for (int i = 0; i < num_images; ++i) {
+      // Camera centres on an arc at distance 6, looking at the origin.
+      const double angle = 0.15 * i;
+      const Eigen::Vector3d center(6 * std::sin(angle), 0.2 * i, -6 * std::cos(angle));
+      const Eigen::Vector3d z = -center.normalized();
+      const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+      Eigen::Matrix3d rotation;
+      rotation << x.transpose(), z.cross(x).transpose(), z.transpose();
+      const Rigid3d cam_from_world(rotation, -rotation * center);
+
+      std::vector<int> order(num_points + num_clutter);
+      for (size_t k = 0; k < order.size(); ++k) order[k] = static_cast<int>(k);
+      Shuffle(order.size(), &order);
+      FeatureKeypoints keypoints;
+      FeatureDescriptors descriptors(order.size(), 128);
+      std::vector<int> point_of_keypoint;
+      for (size_t k = 0; k < order.size(); ++k) {
+        const int j = order[k];
+        if (j < num_points) {
+          const Eigen::Vector2d xy = camera.ImgFromCam(cam_from_world * points[j]);
+          keypoints.emplace_back(static_cast<float>(xy.x()), static_cast<float>(xy.y()));
+          descriptors.row(k) = point_descriptors.row(j);
+          point_of_keypoint.push_back(j);
+        } else {
+          keypoints.emplace_back(RandomUniformReal(0, 640), RandomUniformReal(0, 480));
+          for (int d = 0; d < 128; ++d) {
+            descriptors(k, d) = static_cast<uint8_t>(RandomUniformInteger(0, 255));
+          }
+          point_of_keypoint.push_back(-1);
+        }
+      }
+      // Names in reverse id order: pairs follow names, not ids.
+      const image_t image_id = database->WriteImageWithFeatures(
+          "view" + std::to_string(num_images - i) + ".png", camera_id, keypoints, descriptors);
+      point_of_keypoint_[image_id] = point_of_keypoint;
+    }
+  }
+
+  // True when the match links two observations of the same point.
+  bool IsCorrect(image_t image_id1, image_t image_id2, const FeatureMatch& match) const {
+    const int point1 = point_of_keypoint_.at(image_id1).at(match.point2D_idx1);
+    return point1 >= 0 && point1 == point_of_keypoint_.at(image_id2).at(match.point2D_idx2);
+  }
+
+  fs::path dir_;
+  std::vector<std::vector<int>> point_of_keypoint_;
+};
+
+TEST(PairSelection, ExhaustiveBlocksCoverEveryPairOnce) {
+  std::vector<image_t> ids;
+  for (image_t id = 11; id <= 18; ++id) ids.push_back(id);
+  for (int block_size : {1, 3, 8, 50}) {
+    const auto pairs = ExhaustivePairs(ids, block_size);
+    ASSERT_EQ(pairs.size(), 28u);
+    std::set<std::pair<image_t, image_t>> unique(pairs.begin(), pairs.end());
+    EXPECT_EQ(unique.size(), 28u);
+    for (const auto& [a, b] : pairs) EXPECT_LT(a, b);  // Position order (ids sorted here).
+  }
+  EXPECT_TRUE(ExhaustivePairs({}, 50).empty());
+  EXPECT_TRUE(ExhaustivePairs({5}, 50).empty());
+}
+
+TEST(PairSelection, SequentialOverlap) {
+  const std::vector<image_t> ids = {4, 2, 9, 7, 1};
+  const auto pairs = SequentialPairs(ids, 2);
+  const std::vector<std::pair<image_t, image_t>> expected = {{4, 2}, {4, 9}, {2, 9}, {2, 7},
+                                                             {9, 7}, {9, 1}, {7, 1}};
+  EXPECT_EQ(pairs, expected);
+  EXPECT_EQ(SequentialPairs(ids, 10).size(), 10u);
+  EXPECT_EQ(PairModeFromName("sequential"), PairMode::kSequential);
+  EXPECT_FALSE(PairModeFromName("vocab_tree").has_value());
+}
+
+TEST_F(FeatureMatchingTest, ExhaustiveMatchesAndVerifiesEveryPair) {
+  Database database(dir_ / "database.db");
+  MakeScene(&database, 4, 150, 60);
+  FeatureMatchingPipelineOptions options;
+  options.num_threads = 2;
+  const FeatureMatchingStats stats = MatchAndVerify(options, &database);
+  EXPECT_EQ(stats.num_pairs, 6u);
+  EXPECT_EQ(stats.num_matched, 6u);
+  EXPECT_EQ(stats.num_skipped, 0u);
+  EXPECT_EQ(stats.num_verified, 6u);
+  ASSERT_EQ(stats.pairs.size(), 6u);
+  EXPECT_EQ(database.NumMatchedPairs(), 6u);
+  EXPECT_EQ(database.NumVerifiedPairs(), 6u);
+  for (const PairMatchStats& pair : stats.pairs) {
+    // Identical descriptors: every point is matched and nothing else.
+    EXPECT_EQ(pair.num_putative, 150);
+    EXPECT_GE(pair.num_inliers, 145);
+    const FeatureMatches matches = database.ReadMatches(pair.image_id1, pair.image_id2);
+    EXPECT_EQ(matches.size(), 150u);
+    for (const FeatureMatch& match : matches) {
+      EXPECT_TRUE(IsCorrect(pair.image_id1, pair.image_id2, match));
+    }
+    const TwoViewGeometry geometry = database.ReadTwoViewGeometry(pair.image_id1, pair.image_id2);
+    EXPECT_EQ(static_cast<int>(geometry.inlier_matches.size()), pair.num_inliers);
+    EXPECT_EQ(geometry.config, pair.config);
+    for (const FeatureMatch& match : geometry.inlier_matches) {
+      EXPECT_TRUE(IsCorrect(pair.image_id1, pair.image_id2, match));
+    }
+  }
+
+  // A second run finds everything done.
+  const FeatureMatchingStats again = MatchAndVerify(options, &database);
+  EXPECT_EQ(again.num_pairs, 6u);
+  EXPECT_EQ(again.num_skipped, 6u);
+  EXPECT_EQ(again.num_matched, 0u);
+  EXPECT_EQ(database.NumVerifiedPairs(), 6u);
+}
+
+TEST_F(FeatureMatchingTest, SequentialPairsFollowNamesAndResume) {
+  Database database(dir_ / "database.db");
+  MakeScene(&database, 5, 100, 20);
+  // Pairs stored by an earlier, interrupted run: one fully verified, one with matches only.
+  database.WriteTwoViewGeometry(5, 4, TwoViewGeometry());
+  FeatureMatchingPipelineOptions options;
+  options.pair_mode = PairMode::kSequential;
+  options.sequential_overlap = 1;
+  options.batch_size = 2;
+  options.num_threads = 2;
+  {
+    // Matches for (3, 2): the true correspondences of 40 points.
+    FeatureMatches matches;
+    for (point2D_t k = 0; k < point_of_keypoint_[3].size() && matches.size() < 40; ++k) {
+      const int point = point_of_keypoint_[3][k];
+      if (point < 0) continue;
+      for (point2D_t l = 0; l < point_of_keypoint_[2].size(); ++l) {
+        if (point_of_keypoint_[2][l] == point) matches.push_back({k, l});
+      }
+    }
+    database.WriteMatches(3, 2, matches);
+  }
+  const FeatureMatchingStats stats = MatchAndVerify(options, &database);
+  // Names view1..view5 belong to ids 5..1, so the sequence is 5-4, 4-3, 3-2, 2-1.
+  EXPECT_EQ(stats.num_pairs, 4u);
+  EXPECT_EQ(stats.num_skipped, 1u);
+  EXPECT_EQ(stats.num_matched, 3u);
+  EXPECT_EQ(stats.num_verified, 3u);
+  std::set<std::pair<image_t, image_t>> processed;
+  for (const PairMatchStats& pair : stats.pairs) {
+    processed.insert({pair.image_id1, pair.image_id2});
+    if (pair.image_id1 == 3 && pair.image_id2 == 2) {
+      EXPECT_EQ(pair.num_putative, 40);  // Verified from the stored matches.
+      EXPECT_GE(pair.num_inliers, 38);
+    } else {
+      EXPECT_EQ(pair.num_putative, 100);
+    }
+  }
+  const std::set<std::pair<image_t, image_t>> expected = {{4, 3}, {3, 2}, {2, 1}};
+  EXPECT_EQ(processed, expected);
+  EXPECT_EQ(database.ReadMatches(2, 3).size(), 40u);
+  EXPECT_FALSE(database.ExistsTwoViewGeometry(1, 3));
+}
+
+TEST_F(FeatureMatchingTest, PairsWithoutCommonPointsAreDegenerate) {
+  Database database(dir_ / "database.db");
+  const camera_t camera_id = database.WriteCamera(
+      Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 800, 640, 480));
+  for (const char* name : {"a.png", "b.png"}) {
+    FeatureKeypoints keypoints;
+    FeatureDescriptors descriptors(80, 128);
+    for (int k = 0; k < 80; ++k) {
+      keypoints.emplace_back(RandomUniformReal(0, 640), RandomUniformReal(0, 480));
+      for (int d = 0; d < 128; ++d) {
+        descriptors(k, d) = static_cast<uint8_t>(RandomUniformInteger(0, 255));
+      }
+    }
+    database.WriteImageWithFeatures(name, camera_id, keypoints, descriptors);
+  }
+  const FeatureMatchingStats stats = MatchAndVerify(FeatureMatchingPipelineOptions(), &database);
+  ASSERT_EQ(stats.pairs.size(), 1u);
+  EXPECT_EQ(stats.num_verified, 0u);
+  EXPECT_LT(stats.pairs[0].num_putative, 15);
+  EXPECT_EQ(stats.pairs[0].num_inliers, 0);
+  EXPECT_EQ(database.ReadTwoViewGeometry(1, 2).config, TwoViewGeometry::kDegenerate);
+  EXPECT_TRUE(database.ExistsTwoViewGeometry(1, 2));
+}
+
+}  // namespace
+}  // namespace parallax

@@ -1,0 +1,72 @@
+#include "parallax/pipeline/reconstruction_pipeline.h"
+
+#include "parallax/util/check.h"
+#include "parallax/util/file.h"
+#include "parallax/util/logging.h"
+#include "parallax/util/timer.h"
+
+namespace parallax {
+
+void ReconstructionPipelineOptions::Check() const {
+  extraction.Check();
+  matching.Check();
+  mapping.Check();
+}
+
+ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipelineOptions& options,
+                                                       const std::filesystem::path& image_dir,
+                                                       const std::filesystem::path& output_dir) {
+  options.Check();
+  if (!std::filesystem::is_directory(image_dir)) {
+    throw InputError(image_dir.string() + ": image folder does not exist");
+  }
+  CreateDirectoryOrThrow(output_dir);
+  const std::filesystem::path database_path =
+      options.database_path.empty() ? output_dir / "database.db" : options.database_path;
+  Database database(database_path);
+  ReconstructionPipelineResult result;
+  Timer timer;
+
+  // 1. Features.
+  result.extraction = ExtractFeatures(options.extraction, image_dir, &database);
+  result.timings.emplace_back("features", timer.ElapsedSeconds());
+  PARALLAX_LOG(Info) << "features: " << result.extraction.num_extracted << " images extracted, "
+                     << result.extraction.num_skipped << " already stored, "
+                     << result.extraction.failed.size() << " unreadable, "
+                     << result.extraction.mean_num_keypoints << " keypoints per image ("
+                     << result.timings.back().second << " s)";
+  if (database.NumImages() < 2) {
+    throw InputError(image_dir.string() + ": fewer than two readable images");
+  }
+
+  // 2 + 3. Matching and geometric verification.
+  timer.Restart();
+  result.matching = MatchAndVerify(options.matching, &database);
+  result.timings.emplace_back("matching", timer.ElapsedSeconds());
+  PARALLAX_LOG(Info) << "matching: " << result.matching.num_matched << " pairs matched, "
+                     << result.matching.num_skipped << " already stored, "
+                     << result.matching.num_verified << " verified ("
+                     << result.timings.back().second << " s)";
+
+  // 4 + 5. Mapping and outputs.
+  timer.Restart();
+  result.mapping = RunMappingStage(options.mapping, database, image_dir, output_dir);
+  result.timings.emplace_back("mapping", timer.ElapsedSeconds());
+  for (const std::string& line : UnregisteredImageLines(result.mapping)) {
+    PARALLAX_LOG(Warning) << line;
+  }
+  if (!result.Success()) return result;
+  result.summary = BuildRunSummary(result.mapping, result.timings);
+  result.summary["features"] = {{"images_extracted", result.extraction.num_extracted},
+                                {"images_skipped_already_stored", result.extraction.num_skipped},
+                                {"unreadable", result.extraction.failed.size()},
+                                {"mean_keypoints", result.extraction.mean_num_keypoints}};
+  result.summary["matching"] = {{"pairs", result.matching.num_pairs},
+                                {"pairs_matched", result.matching.num_matched},
+                                {"pairs_skipped_already_stored", result.matching.num_skipped},
+                                {"pairs_verified", result.matching.num_verified}};
+  WriteRunSummary(result.summary, output_dir / "summary.json");
+  return result;
+}
+
+}  // namespace parallax

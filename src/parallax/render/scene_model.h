@@ -1,0 +1,122 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+namespace parallax {
+
+// Surface kinds; each has its own procedural texture.
+enum class Material : uint8_t { kGround, kStone, kColumn, kWall, kRoof };
+
+struct SceneModelOptions {
+  // Number of temples, in a row along world +x (a long row for long sequences).
+  int num_temples = 1;
+  // Distance in metres between the centres of neighbouring temples.
+  double temple_spacing = 18.0;
+  // Seed of the textures and of the small blocks scattered around each temple.
+  uint64_t seed = 0;
+
+  void Check() const;
+};
+
+// A ray's nearest surface.
+struct SurfaceHit {
+  // Ray parameter: distance from the origin along the unit direction.
+  double distance = 0.0;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  // Unit normal facing the ray's origin.
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  // Texture coordinates in metres on the surface.
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+  Material material = Material::kGround;
+  // Per-surface texture seed, so that no two surfaces look alike.
+  uint32_t texture_seed = 0;
+};
+
+// A procedurally textured temple scene made of analytic primitives, in metres, world z up:
+// a large ground plane (z = 0) and, per temple, a three-step base, a cella (a walled box), a
+// peristyle of columns with plinths and capitals, an architrave slab and a gabled roof, plus
+// a few stone blocks around it. Temple k is centred at (k * temple_spacing, 0, 0), about
+// 12 m long (x), 8 m wide (y) and 7.4 m high. Textures are deterministic functions of the
+// surface point and the seed, rich from metres down to centimetres (fractal value noise,
+// blocks, veins, speckles) so that SIFT finds stable keypoints on every surface; they fade
+// detail finer than the pixel footprint (anti-aliasing and speed).
+class SceneModel {
+ public:
+  explicit SceneModel(const SceneModelOptions& options = {});
+
+  // Nearest surface along origin + t * direction with 0 < t < max_distance (direction of
+  // unit length). Returns false when the ray reaches the sky.
+  bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                 double max_distance, SurfaceHit* hit) const;
+  // True when anything blocks the segment (for shadow rays).
+  bool Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                double max_distance) const;
+  // Diffuse reflectance (RGB in [0, 1]) at a hit; `footprint` is the size in metres of one
+  // pixel there, below which texture detail is averaged out.
+  Eigen::Vector3f Albedo(const SurfaceHit& hit, double footprint) const;
+  // Colour of the sky in a direction.
+  static Eigen::Vector3f SkyColor(const Eigen::Vector3d& direction);
+
+  const SceneModelOptions& Options() const { return options_; }
+  // Centre of temple k at ground level.
+  Eigen::Vector3d TempleCenter(int temple_idx) const;
+  // Height of the ridge of the roof.
+  static constexpr double kTempleHeight = 7.4;
+  // Box of everything but the ground.
+  const Eigen::AlignedBox3d& Bounds() const { return bounds_; }
+  // Radius of the ground disc around the row of temples; beyond it is sky.
+  double GroundRadius() const { return ground_radius_; }
+  size_t NumPrimitives() const { return primitives_.size(); }
+
+ private:
+  enum class Shape : uint8_t { kBox, kCylinder, kTriangle };
+  struct Primitive {
+    Shape shape = Shape::kBox;
+    Material material = Material::kStone;
+    uint32_t texture_seed = 0;
+    // Bounds (the box itself for kBox).
+    Eigen::AlignedBox3d box;
+    // kCylinder: vertical axis through (center.x, center.y) from box.min.z to box.max.z.
+    Eigen::Vector2d center = Eigen::Vector2d::Zero();
+    double radius = 0.0;
+    // kTriangle: vertex, edges, unit normal and texture axes (unit, in the plane).
+    Eigen::Vector3d vertex = Eigen::Vector3d::Zero();
+    Eigen::Vector3d edge1 = Eigen::Vector3d::Zero(), edge2 = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    Eigen::Vector3d axis_u = Eigen::Vector3d::Zero(), axis_v = Eigen::Vector3d::Zero();
+  };
+  // A bounding volume hierarchy node: an inner node has two children, a leaf a range.
+  struct Node {
+    Eigen::AlignedBox3d box;
+    int left = -1, right = -1;
+    int first = 0, count = 0;
+  };
+
+  void AddTemple(int temple_idx);
+  void AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Material material);
+  void AddCylinder(const Eigen::Vector2d& center, double radius, double z_min, double z_max,
+                   Material material);
+  // Texture u runs along `u_direction` projected into the triangle's plane.
+  void AddTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                   const Eigen::Vector3d& u_direction, Material material);
+  int BuildNode(int first, int count);
+  // Distance to the primitive (or +inf); fills the hit when not null and nearer.
+  bool IntersectPrimitive(const Primitive& primitive, const Eigen::Vector3d& origin,
+                          const Eigen::Vector3d& direction, const Eigen::Vector3d& inv_direction,
+                          double max_distance, SurfaceHit* hit) const;
+  template <bool kAnyHit>
+  bool Traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                double max_distance, SurfaceHit* hit) const;
+
+  SceneModelOptions options_;
+  std::vector<Primitive> primitives_;
+  std::vector<Node> nodes_;
+  Eigen::AlignedBox3d bounds_;
+  double ground_radius_ = 0.0;
+  uint32_t next_texture_seed_ = 0;
+};
+
+}  // namespace parallax

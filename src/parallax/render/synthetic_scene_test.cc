@@ -1,0 +1,151 @@
+#include "parallax/render/synthetic_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <unistd.h>
+
+#include "parallax/scene/colmap_io.h"
+#include "parallax/util/check.h"
+#include "parallax/util/file.h"
+
+namespace parallax {
+namespace {
+
+using Layout = SyntheticSceneOptions::Layout;
+
+class SyntheticSceneTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("parallax_synthetic_scene_test_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::filesystem::path dir_;
+};
+
+TEST(SyntheticSceneViews, EveryLayoutLooksAtTheScene) {
+  for (const Layout layout : {Layout::kRing, Layout::kHemisphere, Layout::kSequence}) {
+    SyntheticSceneOptions options;
+    options.layout = layout;
+    options.num_views = 40;
+    const Reconstruction views = SyntheticSceneViews(options);
+    ASSERT_EQ(views.NumRegImages(), 40u);
+    const Camera& camera = views.GetCamera(1);
+    EXPECT_EQ(camera.ModelName(), "PINHOLE");
+    EXPECT_DOUBLE_EQ(camera.FocalLengthX(), 576.0);
+    EXPECT_EQ(views.GetImage(1).name, "view_0001.png");
+    EXPECT_EQ(views.GetImage(40).name, "view_0040.png");
+    const SceneModel scene(SyntheticSceneModelOptions(options));
+    double max_step = 0;
+    for (const auto& [image_id, image] : views.Images()) {
+      // The ray through the image centre hits a temple or the plaza near one.
+      SurfaceHit hit;
+      const Eigen::Vector3d direction = image.ViewingDirection();
+      ASSERT_TRUE(scene.Intersect(image.ProjectionCenter(), direction, 1e9, &hit));
+      EXPECT_LT(hit.distance, 40.0);
+      EXPECT_GT(image.ProjectionCenter().z(), 1.0);
+      if (image_id > 1) {
+        max_step = std::max(max_step, (image.ProjectionCenter() - views.GetImage(image_id - 1).ProjectionCenter()).norm());
+      }
+    }
+    // Consecutive views stay close, so that sequential matching works.
+    EXPECT_LT(max_step, layout == Layout::kSequence ? 1.5 : 7.0);
+  }
+}
+
+TEST(SyntheticSceneViews, LongSequencesWalkPastARowOfTemples) {
+  SyntheticSceneOptions options;
+  options.layout = Layout::kSequence;
+  options.num_views = 500;
+  EXPECT_GE(SyntheticSceneModelOptions(options).num_temples, 15);
+  const Reconstruction views = SyntheticSceneViews(options);
+  const double length =
+      (views.GetImage(500).ProjectionCenter() - views.GetImage(1).ProjectionCenter()).norm();
+  EXPECT_GT(length, 250.0);
+}
+
+TEST(SyntheticSceneViews, DeterministicForASeed) {
+  SyntheticSceneOptions options;
+  options.layout = Layout::kHemisphere;
+  options.seed = 3;
+  const Reconstruction a = SyntheticSceneViews(options), b = SyntheticSceneViews(options);
+  options.seed = 4;
+  const Reconstruction c = SyntheticSceneViews(options);
+  EXPECT_EQ(a.GetImage(7).cam_from_world.translation, b.GetImage(7).cam_from_world.translation);
+  EXPECT_NE(a.GetImage(7).cam_from_world.translation, c.GetImage(7).cam_from_world.translation);
+  options.lighting_variation = 1.0;
+  EXPECT_NE(SyntheticSceneRenderOptions(options, 0).sun_direction,
+            SyntheticSceneRenderOptions(options, 1).sun_direction);
+  EXPECT_EQ(SyntheticSceneRenderOptions(options, 1).exposure, SyntheticSceneRenderOptions(options, 1).exposure);
+  options.lighting_variation = 2.0;
+  EXPECT_THROW(SyntheticSceneViews(options), CheckError);
+  EXPECT_THROW(SyntheticSceneLayoutFromName("spiral"), InputError);
+}
+
+TEST_F(SyntheticSceneTest, WritesImagesAndExactCameras) {
+  SyntheticSceneOptions options;
+  options.num_views = 4;
+  options.width = 160;
+  options.height = 120;
+  options.noise_stddev = 1.0;
+  options.lighting_variation = 0.5;
+  options.name = "temple";
+  const Reconstruction views = GenerateSyntheticScene(options, dir_);
+  ASSERT_EQ(views.NumImages(), 4u);
+  for (const auto& [image_id, image] : views.Images()) {
+    const cv::Mat decoded = cv::imread((dir_ / image.name).string(), cv::IMREAD_COLOR);
+    ASSERT_FALSE(decoded.empty()) << image.name;
+    EXPECT_EQ(decoded.size(), cv::Size(160, 120));
+  }
+
+  // Middlebury-style: count, then name K R t per line; K [R | t] must be the exact camera.
+  const std::vector<std::string> lines = SplitLines(ReadFileToString(dir_ / "temple_par.txt"));
+  ASSERT_GE(lines.size(), 5u);
+  EXPECT_EQ(lines[0], "4");
+  const Eigen::Matrix3d K_expected = views.GetCamera(1).CalibrationMatrix();
+  for (size_t i = 1; i <= 4; ++i) {
+    std::istringstream stream(lines[i]);
+    std::string name;
+    Eigen::Matrix3d K, R;
+    Eigen::Vector3d t;
+    stream >> name;
+    for (int k = 0; k < 9; ++k) stream >> K(k / 3, k % 3);
+    for (int k = 0; k < 9; ++k) stream >> R(k / 3, k % 3);
+    stream >> t.x() >> t.y() >> t.z();
+    ASSERT_FALSE(stream.fail()) << lines[i];
+    const Image& image = views.GetImage(static_cast<image_t>(i));
+    EXPECT_EQ(name, image.name);
+    EXPECT_LT((K - K_expected).norm(), 1e-12);
+    EXPECT_LT((R - image.cam_from_world.rotation.toRotationMatrix()).norm(), 1e-14);
+    EXPECT_LT((t - image.cam_from_world.translation).norm(), 1e-12);
+  }
+  std::istringstream k_file(ReadFileToString(dir_ / "K.txt"));
+  Eigen::Matrix3d K;
+  for (int k = 0; k < 9; ++k) k_file >> K(k / 3, k % 3);
+  EXPECT_LT((K - K_expected).norm(), 1e-12);
+
+  // The COLMAP model reads back with the project's reader.
+  const Reconstruction gt = ReadReconstruction(dir_ / "gt");
+  EXPECT_EQ(gt.NumImages(), 4u);
+  EXPECT_EQ(gt.NumPoints3D(), 0u);
+  EXPECT_EQ(gt.GetCamera(1).params, views.GetCamera(1).params);
+  for (const auto& [image_id, image] : views.Images()) {
+    const Image& read = gt.GetImage(image_id);
+    EXPECT_EQ(read.name, image.name);
+    EXPECT_LT(RotationAngleDegrees(read.cam_from_world.rotation, image.cam_from_world.rotation), 1e-9);
+    EXPECT_LT((read.cam_from_world.translation - image.cam_from_world.translation).norm(), 1e-12);
+  }
+
+  // The same options write the same bytes.
+  const std::string first = ReadFileToString(dir_ / "view_0003.png");
+  GenerateSyntheticScene(options, dir_);
+  EXPECT_EQ(ReadFileToString(dir_ / "view_0003.png"), first);
+}
+
+}  // namespace
+}  // namespace parallax
