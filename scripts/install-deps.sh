@@ -10,10 +10,11 @@ packages=(
   libopencv-features2d-dev libopencv-calib3d-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium
 )
 # Extra packages for optional checks, installed when asked: PARALLAX_EXTRA_DEPS=1.
 if [[ "${PARALLAX_EXTRA_DEPS:-0}" == "1" ]]; then
-  packages+=(chromium clang-14 libclang-rt-14-dev)
+  packages+=(clang-14 libclang-rt-14-dev)
 fi
 
 missing=()

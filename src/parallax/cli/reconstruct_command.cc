@@ -6,6 +6,7 @@
 #include "parallax/cli/pipeline_options_cli.h"
 #include "parallax/math/random.h"
 #include "parallax/pipeline/reconstruction_pipeline.h"
+#include "parallax/report/html_report.h"
 
 namespace parallax::cli {
 
@@ -15,6 +16,7 @@ int RunReconstruct(int argc, char** argv) {
   std::string image_dir, output_dir, database_path;
   uint64_t seed = 0;
   int num_threads = -1;
+  bool write_report = false;
   ReconstructionPipelineOptions options;
   ExtractionFlags extraction_flags;
   MatchingFlags matching_flags;
@@ -27,6 +29,7 @@ int RunReconstruct(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--seed", seed, "Random seed (same inputs, options and seed: same model)")
       ->capture_default_str();
+  app.add_flag("--report", write_report, "Also write OUT/report.html");
   extraction_flags.Add(app, &options.extraction);
   matching_flags.Add(app, &options.matching);
   AddMapperOptions(app, &options.mapping);
@@ -47,6 +50,18 @@ int RunReconstruct(int argc, char** argv) {
       std::cerr << "error: " << image_dir << ": no model could be started: "
                 << result.mapping.summary.failure << std::endl;
       return 1;
+    }
+    if (write_report) {
+      const std::filesystem::path out(output_dir);
+      Database database(database_path.empty() ? out / "database.db"
+                                              : std::filesystem::path(database_path));
+      HtmlReportInputs inputs;
+      inputs.reconstruction = &result.mapping.models.front();
+      inputs.database = &database;
+      inputs.image_dir = image_dir;
+      inputs.summary = result.summary;
+      WriteHtmlReport(inputs, out / "report.html");
+      std::cout << "report: " << (out / "report.html").string() << "\n";
     }
     double total = 0;
     for (const auto& [stage, seconds] : result.timings) {

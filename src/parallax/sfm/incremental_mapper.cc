@@ -120,7 +120,7 @@ class IncrementalMapper::ModelBuilder {
       }
       break;
     }
-    GlobalBundleAdjust();
+    GlobalBundleAdjust(/*final=*/true);
   }
 
  private:
@@ -372,14 +372,19 @@ class IncrementalMapper::ModelBuilder {
     TriangulateImage(options_.triangulation, image_id, &model_);
   }
 
-  void GlobalBundleAdjust() {
+  // Intermediate global adjustments run one round; the last one (`final`) refines until the
+  // model stops changing, with more solver iterations.
+  void GlobalBundleAdjust(bool final = false) {
     const size_t num_observations_before = reconstruction_.NumObservations();
-    for (int round = 0; round < options_.global_ba_max_refinements; ++round) {
+    const int max_rounds = final ? options_.global_ba_max_refinements : 1;
+    for (int round = 0; round < max_rounds; ++round) {
       BundleAdjustmentConfig config;
       for (const image_t image_id : reconstruction_.RegImageIds()) config.AddImage(image_id);
       FixGauge(&config);
       SetCameraConstancy(&config);
-      RunBundleAdjustment(BaOptions(true), config);
+      BundleAdjustmentOptions ba_options = BaOptions(true);
+      if (final) ba_options.max_num_iterations = options_.bundle_adjustment.max_num_iterations;
+      RunBundleAdjustment(ba_options, config);
       ++summary_->num_global_ba;
       const size_t num_filtered = FilterAllPoints(options_.filter, &reconstruction_);
       const size_t num_completed = CompleteAllTracks(options_.triangulation, &model_);
