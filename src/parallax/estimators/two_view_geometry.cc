@@ -90,6 +90,21 @@ bool AreNearlyCollinear(const std::vector<Eigen::Vector2d>& points, const std::v
   return !(min_variance > tolerance * tolerance);
 }
 
+// The smaller of the numbers of distinct keypoints of image 1 and of image 2 among the inliers.
+size_t CountDistinctKeypoints(const FeatureMatches& matches, const std::vector<char>& mask) {
+  std::vector<point2D_t> indices1, indices2;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if (!mask[i]) continue;
+    indices1.push_back(matches[i].point2D_idx1);
+    indices2.push_back(matches[i].point2D_idx2);
+  }
+  const auto count_distinct = [](std::vector<point2D_t>* indices) {
+    std::sort(indices->begin(), indices->end());
+    return static_cast<size_t>(std::unique(indices->begin(), indices->end()) - indices->begin());
+  };
+  return std::min(count_distinct(&indices1), count_distinct(&indices2));
+}
+
 // COLMAP's watermark test: most inliers lie in the border strips of both images and move by
 // one common 2D translation.
 bool DetectWatermark(const Camera& camera1, const std::vector<Eigen::Vector2d>& points1,
@@ -371,10 +386,12 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
     return geometry;
   }
 
-  // Matches along one line (or on one point) satisfy every model of the family: refuse.
+  // Matches along one line (or on one point) satisfy every model of the family, and one
+  // keypoint matched many times (no cross-check) is one observation, not many: refuse both.
   if (AreNearlyCollinear(matched1, *inlier_mask, options.max_error_px) ||
-      AreNearlyCollinear(matched2, *inlier_mask, options.max_error_px)) {
-    PARALLAX_LOG(Debug) << "Two-view inliers are collinear: degenerate pair";
+      AreNearlyCollinear(matched2, *inlier_mask, options.max_error_px) ||
+      CountDistinctKeypoints(valid_matches, *inlier_mask) < min_num_inliers) {
+    PARALLAX_LOG(Debug) << "Two-view inliers are collinear or repeated: degenerate pair";
     geometry.config = TwoViewGeometry::kDegenerate;
     return geometry;
   }

@@ -311,6 +311,19 @@ TEST(EstimateTwoViewGeometry, DuplicateAndCollinearPointsAreDegenerate) {
       EXPECT_TRUE(geometry.inlier_matches.empty());
     }
   }
+  // Twelve real matches, each repeated three times: 36 consistent matches but 12 keypoints,
+  // below min_num_inliers.
+  Scene repeated = CalibratedScene(12, 0.0, 0.0);
+  const FeatureMatches originals = repeated.matches;
+  for (int copy = 0; copy < 2; ++copy) {
+    repeated.matches.insert(repeated.matches.end(), originals.begin(), originals.end());
+  }
+  for (const bool calibrated : {false, true}) {
+    repeated.camera1.has_prior_focal_length = calibrated;
+    const TwoViewGeometry geometry = Estimate(repeated);
+    EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
+    EXPECT_TRUE(geometry.inlier_matches.empty());
+  }
   // Half of a good scene duplicated: still verified.
   Scene duplicated = CalibratedScene(200, 0.5, 0.0);
   const size_t num_matches = duplicated.matches.size();
