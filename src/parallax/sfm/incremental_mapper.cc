@@ -32,6 +32,7 @@ void IncrementalMapperOptions::Check() const {
   PARALLAX_CHECK_GE(global_ba_images_ratio, 1.0);
   PARALLAX_CHECK_GE(global_ba_points_ratio, 1.0);
   PARALLAX_CHECK_GE(global_ba_max_refinements, 1);
+  PARALLAX_CHECK_GE(final_ba_max_iterations, 1);
   PARALLAX_CHECK_GE(min_model_size, 2);
   PARALLAX_CHECK_GE(max_num_models, 1);
 }
@@ -302,9 +303,11 @@ class IncrementalMapper::ModelBuilder {
   }
 
   // Local adjustments keep intrinsics fixed; global ones refine those without a prior.
+  // Both use the intermediate loss; the final global adjustment switches to the robust one.
   BundleAdjustmentOptions BaOptions(bool global) const {
     const bool refine_intrinsics = global;
     BundleAdjustmentOptions ba = options_.bundle_adjustment;
+    ba.loss_function = options_.intermediate_ba_loss;
     ba.max_num_iterations =
         global ? options_.global_ba_max_iterations : options_.local_ba_max_iterations;
     ba.refine_focal_length = refine_intrinsics && options_.refine_focal_length;
@@ -383,7 +386,10 @@ class IncrementalMapper::ModelBuilder {
       FixGauge(&config);
       SetCameraConstancy(&config);
       BundleAdjustmentOptions ba_options = BaOptions(true);
-      if (final) ba_options.max_num_iterations = options_.bundle_adjustment.max_num_iterations;
+      if (final) {
+        ba_options.loss_function = options_.bundle_adjustment.loss_function;
+        ba_options.max_num_iterations = options_.final_ba_max_iterations;
+      }
       RunBundleAdjustment(ba_options, config);
       ++summary_->num_global_ba;
       const size_t num_filtered = FilterAllPoints(options_.filter, &reconstruction_);
@@ -403,6 +409,10 @@ class IncrementalMapper::ModelBuilder {
                            const BundleAdjustmentConfig& config) {
     const BundleAdjustmentSummary ba_summary = BundleAdjust(ba_options, config, &reconstruction_);
     summary_->ba_seconds += ba_summary.seconds;
+    PARALLAX_LOG(Debug) << "mapper: BA over " << config.images.size() << " images, "
+                        << ba_summary.num_residuals << " observations: "
+                        << ba_summary.num_iterations << " iterations, " << ba_summary.seconds
+                        << " s (" << ba_summary.termination << ")";
   }
 
   const IncrementalMapperOptions& options_;

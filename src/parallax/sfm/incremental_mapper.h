@@ -28,8 +28,14 @@ struct IncrementalMapperOptions {
   // Triangulation and filtering.
   TrackTriangulationOptions triangulation;
   ObservationFilterOptions filter;
-  // Bundle adjustment.
+  // Bundle adjustment. `bundle_adjustment` (robust Cauchy loss) is the final global
+  // adjustment's; local and intermediate global ones use `intermediate_ba_loss` instead. On
+  // templeRing, Cauchy everywhere took 20 s of BA and squared loss everywhere left 1.8 mm
+  // median centre error; squared loss while growing plus a Cauchy finish gives 0.73 mm in
+  // a quarter of the time (LM with the Cauchy loss creeps: 25-45 iterations per solve).
   BundleAdjustmentOptions bundle_adjustment;
+  LossFunctionType intermediate_ba_loss = LossFunctionType::kTrivial;
+  int final_ba_max_iterations = 10;      // Per refinement round of the final adjustment.
   int local_ba_num_images = 6;           // Images optimised around each new image.
   int local_ba_max_iterations = 25;      // Solver iterations of a local adjustment.
   int global_ba_max_iterations = 50;     // Solver iterations of a global adjustment.

@@ -1,0 +1,153 @@
+#include "parallax/estimators/cost_functions/reprojection_error.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "parallax/math/random.h"
+
+namespace parallax {
+namespace {
+
+// Parameters of one observation: a random pose looking at a point in front of the camera and
+// plausible intrinsics with some distortion.
+struct Observation {
+  Eigen::Quaterniond rotation;
+  Eigen::Vector3d translation;
+  Eigen::Vector3d point;
+  std::vector<double> params;
+  Eigen::Vector2d observed;
+};
+
+template <typename Model>
+Observation RandomObservation() {
+  Observation obs;
+  obs.rotation = Eigen::Quaterniond(RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0),
+                                    RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0))
+                     .normalized();
+  obs.translation = Eigen::Vector3d(RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0),
+                                    RandomGaussian(0.0, 1.0));
+  const Eigen::Vector3d in_cam(RandomUniformReal(-1.0, 1.0), RandomUniformReal(-1.0, 1.0),
+                               RandomUniformReal(2.0, 6.0));
+  obs.point = obs.rotation.inverse() * (in_cam - obs.translation);
+  obs.params.assign(Model::kNumParams, 0.0);
+  for (int idx : Model::kFocalIdxs) obs.params[idx] = RandomUniformReal(400.0, 1600.0);
+  for (int idx : Model::kPrincipalPointIdxs) obs.params[idx] = RandomUniformReal(200.0, 400.0);
+  for (int k = 0; k < Model::kNumParams; ++k) {
+    if (obs.params[k] == 0.0) obs.params[k] = RandomUniformReal(-0.05, 0.05);
+  }
+  obs.observed = Eigen::Vector2d(RandomUniformReal(0.0, 640.0), RandomUniformReal(0.0, 480.0));
+  return obs;
+}
+
+// Evaluates a cost function; `wanted[i]` says whether block i's Jacobian is requested.
+struct Evaluation {
+  Eigen::Vector2d residual;
+  std::vector<std::vector<double>> jacobians;
+};
+
+Evaluation Evaluate(const ceres::CostFunction& cost, Observation& obs,
+                    const std::vector<bool>& wanted) {
+  const std::vector<int> sizes = {4, 3, 3, static_cast<int>(obs.params.size())};
+  const double* parameters[] = {obs.rotation.coeffs().data(), obs.translation.data(),
+                                obs.point.data(), obs.params.data()};
+  Evaluation evaluation;
+  evaluation.jacobians.resize(4);
+  double* jacobian_ptrs[4] = {nullptr, nullptr, nullptr, nullptr};
+  for (int i = 0; i < 4; ++i) {
+    if (!wanted[i]) continue;
+    evaluation.jacobians[i].assign(2 * sizes[i], std::numeric_limits<double>::quiet_NaN());
+    jacobian_ptrs[i] = evaluation.jacobians[i].data();
+  }
+  const bool any = wanted[0] || wanted[1] || wanted[2] || wanted[3];
+  EXPECT_TRUE(cost.Evaluate(parameters, evaluation.residual.data(), any ? jacobian_ptrs : nullptr));
+  return evaluation;
+}
+
+template <typename Model>
+void ExpectAnalyticMatchesAutoDiff() {
+  SCOPED_TRACE(Model::kName);
+  for (int trial = 0; trial < 50; ++trial) {
+    Observation obs = RandomObservation<Model>();
+    const std::unique_ptr<ceres::CostFunction> analytic_obs(
+        ReprojectionErrorCostFunction<Model>::Create(obs.observed));
+    const std::unique_ptr<ceres::CostFunction> autodiff(
+        ReprojectionErrorFunctor<Model>::CreateAutoDiff(obs.observed));
+    // Every combination of requested blocks, as Ceres asks for constant blocks' Jacobians
+    // only when they vary.
+    for (int mask = 0; mask < 16; ++mask) {
+      const std::vector<bool> wanted = {(mask & 1) != 0, (mask & 2) != 0, (mask & 4) != 0,
+                                        (mask & 8) != 0};
+      const Evaluation expected = Evaluate(*autodiff, obs, {true, true, true, true});
+      const Evaluation actual = Evaluate(*analytic_obs, obs, wanted);
+      EXPECT_NEAR((actual.residual - expected.residual).norm(), 0.0,
+                  1e-9 * (1.0 + expected.residual.norm()));
+      for (int i = 0; i < 4; ++i) {
+        if (!wanted[i]) continue;
+        ASSERT_EQ(actual.jacobians[i].size(), expected.jacobians[i].size());
+        for (size_t k = 0; k < actual.jacobians[i].size(); ++k) {
+          const double scale = 1.0 + std::abs(expected.jacobians[i][k]);
+          EXPECT_NEAR(actual.jacobians[i][k], expected.jacobians[i][k], 1e-9 * scale)
+              << "block " << i << " entry " << k;
+        }
+      }
+    }
+  }
+}
+
+TEST(ReprojectionErrorCostFunction, AnalyticJacobiansMatchAutomaticForEveryModel) {
+  SetPRNGSeed(11);
+  ExpectAnalyticMatchesAutoDiff<SimplePinholeModel>();
+  ExpectAnalyticMatchesAutoDiff<PinholeModel>();
+  ExpectAnalyticMatchesAutoDiff<SimpleRadialModel>();
+  ExpectAnalyticMatchesAutoDiff<RadialModel>();
+  ExpectAnalyticMatchesAutoDiff<OpenCVModel>();
+}
+
+TEST(ReprojectionErrorCostFunction, ZeroAtTheTrueProjectionAndPixelsOtherwise) {
+  SetPRNGSeed(12);
+  Observation obs = RandomObservation<PinholeModel>();
+  const Eigen::Vector3d in_cam = obs.rotation * obs.point + obs.translation;
+  double x, y;
+  PinholeModel::ImgFromCam(obs.params.data(), in_cam.x(), in_cam.y(), in_cam.z(), &x, &y);
+  const std::unique_ptr<ceres::CostFunction> exact(
+      CreateReprojectionErrorCostFunction(CameraModelId::kPinhole, Eigen::Vector2d(x, y)));
+  EXPECT_LT(Evaluate(*exact, obs, {false, false, false, false}).residual.norm(), 1e-9);
+  const std::unique_ptr<ceres::CostFunction> shifted(
+      CreateReprojectionErrorCostFunction(CameraModelId::kPinhole, Eigen::Vector2d(x - 3, y + 4)));
+  const Eigen::Vector2d residual = Evaluate(*shifted, obs, {true, true, true, true}).residual;
+  EXPECT_NEAR(residual.x(), 3.0, 1e-9);
+  EXPECT_NEAR(residual.y(), -4.0, 1e-9);
+}
+
+// Along the quaternion manifold the analytic Jacobian predicts the residual's change.
+TEST(ReprojectionErrorCostFunction, RotationJacobianPredictsChangeOnTheManifold) {
+  SetPRNGSeed(13);
+  Observation obs = RandomObservation<SimpleRadialModel>();
+  const std::unique_ptr<ceres::CostFunction> cost(
+      CreateReprojectionErrorCostFunction(CameraModelId::kSimpleRadial, obs.observed));
+  const Evaluation at = Evaluate(*cost, obs, {true, false, false, false});
+  const ceres::EigenQuaternionManifold manifold;
+  double plus_jacobian[12];
+  ASSERT_TRUE(manifold.PlusJacobian(obs.rotation.coeffs().data(), plus_jacobian));
+  const Eigen::Map<const Eigen::Matrix<double, 2, 4, Eigen::RowMajor>> d_q(at.jacobians[0].data());
+  const Eigen::Map<const Eigen::Matrix<double, 4, 3, Eigen::RowMajor>> d_plus(plus_jacobian);
+  const Eigen::Matrix<double, 2, 3> d_tangent = d_q * d_plus;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double step = 1e-6;
+    Eigen::Vector3d delta = Eigen::Vector3d::Zero();
+    delta[axis] = step;
+    Observation moved = obs;
+    ASSERT_TRUE(manifold.Plus(obs.rotation.coeffs().data(), delta.data(),
+                              moved.rotation.coeffs().data()));
+    const Eigen::Vector2d change =
+        Evaluate(*cost, moved, {false, false, false, false}).residual - at.residual;
+    EXPECT_NEAR((change / step - d_tangent.col(axis)).norm(), 0.0,
+                1e-4 * (1.0 + d_tangent.col(axis).norm()));
+  }
+}
+
+}  // namespace
+}  // namespace parallax
