@@ -330,10 +330,11 @@ TEST(BundleAdjustment, ConstantCamerasAndPointsStayFixed) {
   EXPECT_EQ(estimate.GetPoint3D(2).xyz, truth.GetPoint3D(2).xyz);
 }
 
+// Above 150 images the sparse Schur path is taken.
 TEST(BundleAdjustment, LargeProblemUsesSparseSolver) {
   SceneOptions scene;
-  scene.num_images = 60;
-  scene.num_points = 600;
+  scene.num_images = 160;
+  scene.num_points = 800;
   scene.track_length = 6;
   const Reconstruction truth = SynthesizeScene(scene);
   Reconstruction estimate = truth;
