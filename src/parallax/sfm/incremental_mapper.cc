@@ -379,6 +379,64 @@ class IncrementalMapper::ModelBuilder {
   // model stops changing, with more solver iterations.
   void GlobalBundleAdjust(bool final = false) {
     const size_t num_observations_before = reconstruction_.NumObservations();
+    const bool refine_principal_point = final && PrincipalPointsConstrained();
+    const std::map<camera_t, std::vector<double>> params_before = CameraParams();
+    GlobalBundleAdjustRounds(final, refine_principal_point);
+    if (refine_principal_point && !IntrinsicsPlausible()) {
+      PARALLAX_LOG(Info) << "mapper: refined principal point left the image centre; "
+                            "adjusting again with it fixed";
+      for (const auto& [camera_id, params] : params_before) {
+        reconstruction_.GetCamera(camera_id).params = params;
+      }
+      GlobalBundleAdjustRounds(final, /*refine_principal_point=*/false);
+    }
+    images_at_last_global_ba_ = reconstruction_.NumRegImages();
+    points_at_last_global_ba_ = reconstruction_.NumPoints3D();
+    PARALLAX_LOG(Debug) << "mapper: global BA on " << images_at_last_global_ba_ << " images, "
+                        << points_at_last_global_ba_ << " points (" << num_observations_before
+                        << " -> " << reconstruction_.NumObservations() << " observations)";
+  }
+
+  // The principal point is worth freeing only when every camera being refined is seen by
+  // enough images; with few views it trades off against focal length and pose.
+  bool PrincipalPointsConstrained() const {
+    if (options_.final_principal_point_min_images <= 0 || !options_.refine_focal_length) {
+      return false;
+    }
+    std::map<camera_t, int> num_images;
+    for (const image_t image_id : reconstruction_.RegImageIds()) {
+      ++num_images[reconstruction_.GetImage(image_id).camera_id];
+    }
+    bool any = false;
+    for (const auto& [camera_id, count] : num_images) {
+      if (reconstruction_.GetCamera(camera_id).has_prior_focal_length) continue;
+      if (count < options_.final_principal_point_min_images) return false;
+      any = true;
+    }
+    return any;
+  }
+
+  std::map<camera_t, std::vector<double>> CameraParams() const {
+    std::map<camera_t, std::vector<double>> params;
+    for (const auto& [camera_id, camera] : reconstruction_.Cameras()) params[camera_id] = camera.params;
+    return params;
+  }
+
+  // Refined cameras: principal points within the central 20 % of the image, focal lengths within 0.1-10x the
+  // image size, distortion below 1.
+  bool IntrinsicsPlausible() const {
+    for (const auto& [camera_id, camera] : reconstruction_.Cameras()) {
+      if (camera.has_prior_focal_length) continue;  // Held fixed.
+      const double dx = camera.PrincipalPointX() / camera.width - 0.5;
+      const double dy = camera.PrincipalPointY() / camera.height - 0.5;
+      if (!(std::abs(dx) <= 0.1 && std::abs(dy) <= 0.1) || camera.HasBogusParams(0.1, 10.0, 1.0)) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  void GlobalBundleAdjustRounds(bool final, bool refine_principal_point) {
     const int max_rounds = final ? options_.global_ba_max_refinements : 1;
     for (int round = 0; round < max_rounds; ++round) {
       BundleAdjustmentConfig config;
@@ -390,6 +448,7 @@ class IncrementalMapper::ModelBuilder {
         ba_options.loss_function = options_.bundle_adjustment.loss_function;
         ba_options.max_num_iterations = options_.final_ba_max_iterations;
       }
+      ba_options.refine_principal_point |= refine_principal_point;
       RunBundleAdjustment(ba_options, config);
       ++summary_->num_global_ba;
       const size_t num_filtered = FilterAllPoints(options_.filter, &reconstruction_);
@@ -398,11 +457,6 @@ class IncrementalMapper::ModelBuilder {
       // Stop refining once the model barely changes.
       if (static_cast<double>(num_filtered + num_completed) / num_observations < 0.001) break;
     }
-    images_at_last_global_ba_ = reconstruction_.NumRegImages();
-    points_at_last_global_ba_ = reconstruction_.NumPoints3D();
-    PARALLAX_LOG(Debug) << "mapper: global BA on " << images_at_last_global_ba_ << " images, "
-                        << points_at_last_global_ba_ << " points (" << num_observations_before
-                        << " -> " << reconstruction_.NumObservations() << " observations)";
   }
 
   void RunBundleAdjustment(const BundleAdjustmentOptions& ba_options,
