@@ -161,7 +161,8 @@ int RunCalibrate(int argc, char** argv) {
     PrintIntrinsics(result, fit_k3);
     const CalibratedCamera calibrated = CalibratedCameraFromResult(result);
     WriteCameraJson(calibrated, std::filesystem::path(output));
-    std::cout << "Wrote " << output << "\n";
+    std::cout << "Wrote " << output << " (use it: parallax reconstruct ... --camera " << output
+              << ")\n";
     if (fit_k3 && K3ShiftPixels(calibrated) > 0.1) {
       std::cout << "Note: k3 moves pixels by up to " << std::fixed << std::setprecision(2)
                 << K3ShiftPixels(calibrated)

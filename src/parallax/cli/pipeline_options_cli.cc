@@ -10,9 +10,22 @@ void ExtractionFlags::Add(CLI::App& app, FeatureExtractionOptions* options) {
                  "SIMPLE_RADIAL, or PINHOLE with known intrinsics)");
   auto* params_option = app.add_option("--camera-params", camera_params_,
                                        "Intrinsics in the model's order, e.g. fx,fy,cx,cy");
-  app.add_option("--intrinsics", options->camera.intrinsics_path,
-                 "Text file with the 3x3 calibration matrix K")
-      ->excludes(params_option);
+  auto* intrinsics_option = app.add_option("--intrinsics", options->camera.intrinsics_path,
+                                           "Text file with the 3x3 calibration matrix K")
+                                ->excludes(params_option);
+  app.add_option("--camera", options->camera.camera_json_path,
+                 "camera.json from `parallax calibrate`: OPENCV intrinsics with distortion")
+      ->excludes(params_option)
+      ->excludes(intrinsics_option);
+  app.add_flag("--refine-camera", options->camera.refine_known_intrinsics,
+               "Use --camera/--intrinsics/--camera-params as initial values that bundle "
+               "adjustment refines (default: held fixed)");
+  app.add_flag("!--no-exif", options->camera.use_exif,
+               "Ignore EXIF focal lengths (unknown intrinsics start from 1.2 x the longer side)");
+  app.add_option("--sensor-width", options->camera.sensor_width_mm,
+                 "Sensor width in mm, to turn an EXIF FocalLength into pixels when the image has "
+                 "no FocalPlaneXResolution (used before FocalLengthIn35mmFilm)")
+      ->check(CLI::PositiveNumber);
   auto* single_flag =
       app.add_flag("--single-camera", options->camera.single_camera, "One camera for all images");
   app.add_flag("--camera-per-image", options->camera.camera_per_image, "One camera per image")
@@ -27,6 +40,14 @@ void ExtractionFlags::Add(CLI::App& app, FeatureExtractionOptions* options) {
   app.add_option("--max-image-pixels", options->reader.max_image_pixels,
                  "Refuse images with more pixels than this, before decoding")
       ->capture_default_str();
+  app.add_option("--sift-contrast", options->sift.contrast_threshold,
+                 "SIFT contrast threshold, OpenCV convention (the paper's 0.04; COLMAP's default "
+                 "peak threshold equals 0.02)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--sift-edge", options->sift.edge_threshold, "SIFT edge threshold")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_flag("--no-root-sift", no_root_sift_, "Plain L2-normalised SIFT instead of RootSIFT");
 }
 

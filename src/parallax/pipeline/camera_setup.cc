@@ -1,10 +1,13 @@
 #include "parallax/pipeline/camera_setup.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
 
+#include "parallax/calibration/camera_json.h"
+#include "parallax/calibration/exif.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
@@ -35,6 +38,7 @@ void CameraSetupOptions::Check() const {
   PARALLAX_CHECK_MSG(!(single_camera && camera_per_image),
                      "single_camera and camera_per_image exclude each other");
   PARALLAX_CHECK_GT(default_focal_length_factor, 0.0);
+  PARALLAX_CHECK_GE(sensor_width_mm, 0.0);
 }
 
 Eigen::Matrix3d ReadCalibrationMatrix(const std::filesystem::path& path) {
@@ -97,7 +101,7 @@ CameraModelId SelectedCameraModel(const CameraSetupOptions& options, bool intrin
 }
 
 Camera MakeCamera(const CameraSetupOptions& options, const std::optional<Eigen::Matrix3d>& K,
-                  size_t width, size_t height) {
+                  size_t width, size_t height, std::optional<double> exif_focal_length) {
   PARALLAX_CHECK(width > 0 && height > 0);
   const CameraModelId model_id =
       SelectedCameraModel(options, K.has_value() || !options.camera_params.empty());
@@ -113,7 +117,7 @@ Camera MakeCamera(const CameraSetupOptions& options, const std::optional<Eigen::
                        std::to_string(num_params) + " (choose the model with --camera-model)");
     }
     camera.params = options.camera_params;
-    camera.has_prior_focal_length = true;
+    camera.has_prior_focal_length = !options.refine_known_intrinsics;
     if (!camera.VerifyParams()) {
       throw InputError("--camera-params: focal lengths must be positive and finite");
     }
@@ -127,52 +131,128 @@ Camera MakeCamera(const CameraSetupOptions& options, const std::optional<Eigen::
       camera.params[focal_idxs[0]] = fx;
       camera.params[focal_idxs[1]] = fy;
     }
-    camera.has_prior_focal_length = true;
+    camera.has_prior_focal_length = !options.refine_known_intrinsics;
     return camera;
   }
-  const double focal_length =
-      options.default_focal_length_factor * static_cast<double>(std::max(width, height));
+  // An EXIF focal length is close but rounded (35 mm equivalents are whole millimetres, and
+  // cameras crop), so unlike COLMAP, which flags it as a prior and refines it anyway, it is
+  // left without the prior flag: here the flag holds a camera fixed in bundle adjustment.
+  const double focal_length = exif_focal_length.value_or(
+      options.default_focal_length_factor * static_cast<double>(std::max(width, height)));
   camera.params = CameraModelInitialParams(model_id, focal_length, width / 2.0, height / 2.0);
   camera.has_prior_focal_length = false;
   return camera;
+}
+
+Camera CalibratedCameraForImage(const CameraSetupOptions& options, const Camera& calibrated,
+                                const std::string& image_name, size_t width, size_t height) {
+  if (width != calibrated.width || height != calibrated.height) {
+    throw InputError(image_name + ": image is " + std::to_string(width) + "x" +
+                     std::to_string(height) + " but " + options.camera_json_path.string() +
+                     " calibrates " + std::to_string(calibrated.width) + "x" +
+                     std::to_string(calibrated.height) + " images");
+  }
+  Camera camera = calibrated;
+  camera.camera_id = kInvalidCameraId;
+  camera.has_prior_focal_length = !options.refine_known_intrinsics;
+  return camera;
+}
+
+ImageCameraInfo ReadImageCameraInfo(const std::filesystem::path& path, size_t width, size_t height,
+                                    double sensor_width_mm) {
+  ImageCameraInfo info;
+  std::optional<ExifData> exif;
+  try {
+    exif = ReadExif(path);
+  } catch (const InputError& error) {
+    PARALLAX_LOG(Debug) << error.what();
+  }
+  if (!exif) return info;
+  info.make = exif->make.value_or("");
+  info.model = exif->model.value_or("");
+  info.focal_length_px = FocalLengthPixelsFromExif(
+      *exif, static_cast<int>(width), static_cast<int>(height),
+      sensor_width_mm > 0 ? std::optional<double>(sensor_width_mm) : std::nullopt);
+  return info;
 }
 
 CameraAssigner::CameraAssigner(const CameraSetupOptions& options, Database* database)
     : options_(options), database_(database) {
   options_.Check();
   PARALLAX_CHECK(database != nullptr);
+  const int num_sources = !options_.intrinsics_path.empty() + !options_.camera_json_path.empty() +
+                          !options_.camera_params.empty();
+  if (num_sources > 1) {
+    throw InputError("--camera, --intrinsics and --camera-params exclude each other");
+  }
+  if (!options_.camera_json_path.empty()) {
+    if (!options_.camera_model.empty() && options_.camera_model != "OPENCV") {
+      throw InputError("--camera-model " + options_.camera_model + ": " +
+                       options_.camera_json_path.string() + " holds an OPENCV camera");
+    }
+    calibrated_camera_ = ReadCameraJson(options_.camera_json_path);
+  }
   SelectedCameraModel(options_, false);  // Reject an unknown model before any work.
   if (!options_.intrinsics_path.empty()) K_ = ReadCalibrationMatrix(options_.intrinsics_path);
 }
 
-camera_t CameraAssigner::CameraForImage(const std::string& image_name, size_t width,
+camera_t CameraAssigner::CameraForImage(const std::string& image_path, size_t width,
                                         size_t height) {
-  const Camera wanted = MakeCamera(options_, K_, width, height);
+  const bool intrinsics_known = K_ || calibrated_camera_ || !options_.camera_params.empty();
+  ImageCameraInfo info;
+  if (!intrinsics_known && options_.use_exif && std::filesystem::is_regular_file(image_path)) {
+    info = ReadImageCameraInfo(image_path, width, height, options_.sensor_width_mm);
+    if (info.focal_length_px) {
+      PARALLAX_LOG(Debug) << image_path << ": EXIF focal length " << *info.focal_length_px << " px";
+    }
+  }
+  return CameraForImage(image_path, width, height, info);
+}
+
+camera_t CameraAssigner::CameraForImage(const std::string& image_name, size_t width, size_t height,
+                                        const ImageCameraInfo& info) {
+  const bool intrinsics_known = K_ || calibrated_camera_ || !options_.camera_params.empty();
+  const Camera wanted =
+      calibrated_camera_
+          ? CalibratedCameraForImage(options_, *calibrated_camera_, image_name, width, height)
+          : MakeCamera(options_, K_, width, height,
+                       intrinsics_known ? std::nullopt : info.focal_length_px);
   if (options_.camera_per_image) return database_->WriteCamera(wanted);
 
   if (options_.single_camera && single_camera_id_) {
-    const auto& [size, camera_id] = *camera_by_size_.begin();
-    if (size != std::make_pair(width, height)) {
+    if (*single_camera_size_ != std::make_pair(width, height)) {
       throw InputError(image_name + ": image is " + std::to_string(width) + "x" +
                        std::to_string(height) + " but the single camera is " +
-                       std::to_string(size.first) + "x" + std::to_string(size.second));
+                       std::to_string(single_camera_size_->first) + "x" +
+                       std::to_string(single_camera_size_->second));
     }
-    return camera_id;
+    return *single_camera_id_;
   }
-  const auto it = camera_by_size_.find({width, height});
-  if (it != camera_by_size_.end()) return it->second;
+  // Known intrinsics are one camera per size; otherwise the EXIF body and focal length count.
+  const CameraKey key = intrinsics_known ? CameraKey{width, height, "", "", 0.0}
+                                         : CameraKey{width, height, info.make, info.model,
+                                                     info.focal_length_px.value_or(0.0)};
+  const auto it = camera_by_key_.find(key);
+  if (it != camera_by_key_.end()) return it->second;
 
-  // A camera left by an earlier (interrupted) run with exactly these settings is reused.
+  // A camera left by an earlier (interrupted) run with exactly these settings is reused, unless
+  // this run gave it to other images already (two bodies with equal guesses stay apart).
   camera_t camera_id = kInvalidCameraId;
   for (const Camera& camera : database_->ReadAllCameras()) {
-    if (SameCamera(camera, wanted)) {
+    const bool claimed =
+        std::any_of(camera_by_key_.begin(), camera_by_key_.end(),
+                    [&](const auto& entry) { return entry.second == camera.camera_id; });
+    if (!claimed && SameCamera(camera, wanted)) {
       camera_id = camera.camera_id;
       break;
     }
   }
   if (camera_id == kInvalidCameraId) camera_id = database_->WriteCamera(wanted);
-  camera_by_size_[{width, height}] = camera_id;
-  if (options_.single_camera) single_camera_id_ = camera_id;
+  camera_by_key_[key] = camera_id;
+  if (options_.single_camera) {
+    single_camera_id_ = camera_id;
+    single_camera_size_ = {width, height};
+  }
   return camera_id;
 }
 

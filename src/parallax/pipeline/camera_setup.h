@@ -21,9 +21,18 @@ struct CameraSetupOptions {
   std::vector<double> camera_params;
   // A 3x3 calibration matrix as text (--intrinsics); empty: none.
   std::filesystem::path intrinsics_path;
+  // A camera.json from `parallax calibrate` (--camera): OPENCV model with distortion; empty: none.
+  std::filesystem::path camera_json_path;
+  // Known intrinsics (--camera, --intrinsics, --camera-params) are only initial values that
+  // bundle adjustment refines (--refine-camera): has_prior_focal_length = false.
+  bool refine_known_intrinsics = false;
+  // Take the initial focal length from the image's EXIF when intrinsics are unknown.
+  bool use_exif = true;
+  // Sensor width in mm, for EXIF FocalLength without FocalPlaneXResolution; 0: unknown.
+  double sensor_width_mm = 0;
   // One camera for all images (all must have the same size).
   bool single_camera = false;
-  // One camera per image. Default (neither flag): one camera per image size.
+  // One camera per image. Default (neither flag): one per image size and EXIF camera.
   bool camera_per_image = false;
   // Focal length guess, as a multiple of the longer image side, when intrinsics are unknown.
   double default_focal_length_factor = 1.2;
@@ -43,28 +52,60 @@ std::vector<double> ParseCameraParams(const std::string& text);
 CameraModelId SelectedCameraModel(const CameraSetupOptions& options, bool intrinsics_known);
 
 // A camera (invalid id) for an image of this size: explicit params, else K (principal point
-// and focal lengths from K, zero distortion), else focal = factor * max(width, height) at the
-// image centre with has_prior_focal_length = false.
+// and focal lengths from K, zero distortion), else `exif_focal_length` (pixels) or, without
+// it, factor * max(width, height) at the image centre. Known intrinsics (params, K) get
+// has_prior_focal_length unless refine_known_intrinsics; a guessed or EXIF focal length never
+// does, since the mapper holds cameras with a prior fixed (docs/cameras.md).
 Camera MakeCamera(const CameraSetupOptions& options, const std::optional<Eigen::Matrix3d>& K,
-                  size_t width, size_t height);
+                  size_t width, size_t height,
+                  std::optional<double> exif_focal_length = std::nullopt);
 
-// Assigns cameras to new images, writing them to the database as needed. Reuses matching
-// cameras already in the database so a resumed extraction does not duplicate them.
-// Not thread-safe (serialise with the database writes).
+// The camera of a camera.json file for an image of this size, has_prior_focal_length unless
+// refine_known_intrinsics. Throws InputError naming `image_name` when the size differs from
+// the calibrated one (intrinsics belong to one image size).
+Camera CalibratedCameraForImage(const CameraSetupOptions& options, const Camera& calibrated,
+                                const std::string& image_name, size_t width, size_t height);
+
+// What tells cameras apart when intrinsics are unknown: the EXIF body and its focal length.
+struct ImageCameraInfo {
+  std::string make;                       // EXIF Make, empty when absent.
+  std::string model;                      // EXIF Model, empty when absent.
+  std::optional<double> focal_length_px;  // From EXIF (FocalLengthPixelsFromExif).
+};
+
+// Reads the EXIF of an image file (JPEG; other formats have none here). A file that cannot be
+// read or parsed gives an empty record: the image was decoded already, EXIF is only a hint.
+ImageCameraInfo ReadImageCameraInfo(const std::filesystem::path& path, size_t width, size_t height,
+                                    double sensor_width_mm = 0);
+
+// Assigns cameras to new images, writing them to the database as needed. By default images
+// share a camera when they have the same size and, when intrinsics are unknown, the same EXIF
+// make, model and focal length. Reuses matching cameras already in the database so a resumed
+// extraction does not duplicate them. Not thread-safe (serialise with the database writes).
 class CameraAssigner {
  public:
-  // Reads K from options.intrinsics_path if set (throws InputError).
+  // Reads K from options.intrinsics_path and the camera from options.camera_json_path if set
+  // (throws InputError). Both at once, or either with camera_params, is an InputError.
   CameraAssigner(const CameraSetupOptions& options, Database* database);
-  // The camera id for a new image of this size. Throws InputError naming `image_name` when
-  // single_camera is set and the size differs from the camera's.
-  camera_t CameraForImage(const std::string& image_name, size_t width, size_t height);
+  // The camera id for a new image of this size; `image_path` is read for EXIF when intrinsics
+  // are unknown and options.use_exif (a missing file is no EXIF). Throws InputError naming
+  // `image_path` when single_camera is set and the size differs from the camera's, or when
+  // the size differs from a camera.json's.
+  camera_t CameraForImage(const std::string& image_path, size_t width, size_t height);
+  // As above with the EXIF information given (nothing is read).
+  camera_t CameraForImage(const std::string& image_name, size_t width, size_t height,
+                          const ImageCameraInfo& info);
 
  private:
+  // Images with equal keys share a camera.
+  using CameraKey = std::tuple<size_t, size_t, std::string, std::string, double>;
+
   CameraSetupOptions options_;
   Database* database_;
   std::optional<Eigen::Matrix3d> K_;
-  // Cameras by (width, height) for the per-size and single-camera modes.
-  std::map<std::pair<size_t, size_t>, camera_t> camera_by_size_;
+  std::optional<Camera> calibrated_camera_;
+  std::map<CameraKey, camera_t> camera_by_key_;
+  std::optional<std::pair<size_t, size_t>> single_camera_size_;
   std::optional<camera_t> single_camera_id_;
 };
 

@@ -3,8 +3,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 
+#include "parallax/calibration/camera_json.h"
+#include "parallax/calibration/exif.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
@@ -29,6 +33,80 @@ class CameraSetupTest : public ::testing::Test {
   }
   fs::path dir_;
 };
+
+// The EXIF fields a camera writes about its focal length, for a hand-made APP1 segment.
+struct TestExif {
+  std::string make;
+  std::string model;
+  double focal_length_mm = 0;  // 0: tag absent.
+  int focal_length_35mm = 0;   // 0: tag absent.
+};
+
+std::string U16(uint16_t value) {  // Little endian ("II" TIFF).
+  return {static_cast<char>(value & 0xFF), static_cast<char>(value >> 8)};
+}
+std::string U32(uint32_t value) { return U16(value & 0xFFFF) + U16(value >> 16); }
+
+// A TIFF block: IFD0 {Make, Model, ExifIFD pointer} then the Exif IFD {FocalLength,
+// FocalLengthIn35mmFilm}, each IFD followed by its out-of-line values.
+std::string TiffBlock(const TestExif& exif) {
+  struct Entry {
+    uint16_t tag, type;
+    uint32_t count;
+    std::string value;
+  };
+  const auto write_ifd = [](const std::vector<Entry>& entries, uint32_t offset) {
+    std::string ifd = U16(static_cast<uint16_t>(entries.size())), data;
+    uint32_t data_offset = offset + 2 + 12 * static_cast<uint32_t>(entries.size()) + 4;
+    for (const Entry& entry : entries) {
+      ifd += U16(entry.tag) + U16(entry.type) + U32(entry.count);
+      if (entry.value.size() <= 4) {
+        ifd += entry.value + std::string(4 - entry.value.size(), '\0');
+      } else {
+        ifd += U32(data_offset + static_cast<uint32_t>(data.size()));
+        data += entry.value;
+      }
+    }
+    return ifd + U32(0) + data;
+  };
+  std::vector<Entry> ifd0, exif_ifd;
+  if (!exif.make.empty()) {
+    ifd0.push_back({0x010F, 2, uint32_t(exif.make.size() + 1), exif.make + '\0'});
+  }
+  if (!exif.model.empty()) {
+    ifd0.push_back({0x0110, 2, uint32_t(exif.model.size() + 1), exif.model + '\0'});
+  }
+  if (exif.focal_length_mm > 0) {
+    const auto numerator = static_cast<uint32_t>(std::lround(exif.focal_length_mm * 100));
+    exif_ifd.push_back({0x920A, 5, 1, U32(numerator) + U32(100)});
+  }
+  if (exif.focal_length_35mm > 0) {
+    exif_ifd.push_back({0xA405, 3, 1, U16(static_cast<uint16_t>(exif.focal_length_35mm))});
+  }
+  // The Exif IFD starts after IFD0 (with the pointer entry) and IFD0's values.
+  std::vector<Entry> ifd0_with_pointer = ifd0;
+  ifd0_with_pointer.push_back({0x8769, 4, 1, U32(0)});
+  const uint32_t exif_offset = static_cast<uint32_t>(8 + write_ifd(ifd0_with_pointer, 8).size());
+  ifd0_with_pointer.back().value = U32(exif_offset);
+  return "II" + U16(42) + U32(8) + write_ifd(ifd0_with_pointer, 8) +
+         write_ifd(exif_ifd, exif_offset);
+}
+
+// A gray JPEG from OpenCV (which writes no EXIF), with an APP1 "Exif" segment spliced in
+// right after SOI when `exif` is given.
+std::string JpegBytes(int width, int height, const std::optional<TestExif>& exif) {
+  cv::Mat image(height, width, CV_8UC1);
+  cv::randu(image, 0, 255);
+  std::vector<uchar> buffer;
+  PARALLAX_CHECK(cv::imencode(".jpg", image, buffer));
+  std::string jpeg(buffer.begin(), buffer.end());
+  if (!exif) return jpeg;
+  const std::string payload = std::string("Exif\0\0", 6) + TiffBlock(*exif);
+  const auto length = static_cast<uint16_t>(payload.size() + 2);
+  const std::string segment = std::string("\xFF\xE1", 2) + static_cast<char>(length >> 8) +
+                              static_cast<char>(length & 0xFF) + payload;
+  return jpeg.substr(0, 2) + segment + jpeg.substr(2);
+}
 
 void ExpectInputErrorNaming(const std::function<void()>& body, const std::string& prefix) {
   try {
@@ -178,6 +256,171 @@ TEST_F(CameraSetupTest, AssignerReadsIntrinsicsFile) {
   options.intrinsics_path = WriteText("bad.txt", "800 0 330\n");
   ExpectInputErrorNaming([&] { CameraAssigner(options, &database); },
                          options.intrinsics_path.string());
+}
+
+TEST_F(CameraSetupTest, CameraJsonGivesFixedOpencvCamera) {
+  CalibratedCamera calibrated;
+  calibrated.camera.model_id = CameraModelId::kOpenCV;
+  calibrated.camera.width = 1280;
+  calibrated.camera.height = 960;
+  calibrated.camera.params = {1038.7, 1038.8, 635.7, 477.7, 0.177, -0.459, -0.0012, -0.0023};
+  calibrated.camera.has_prior_focal_length = true;
+  calibrated.rms_error = 0.58;
+  const fs::path json_path = dir_ / "camera.json";
+  WriteCameraJson(calibrated, json_path);
+
+  Database database(dir_ / "database.db");
+  CameraSetupOptions options;
+  options.camera_json_path = json_path;
+  CameraAssigner assigner(options, &database);
+  const camera_t a = assigner.CameraForImage("a.jpg", 1280, 960);
+  EXPECT_EQ(assigner.CameraForImage("b.jpg", 1280, 960), a);
+  const Camera camera = database.ReadCamera(a);
+  EXPECT_EQ(camera.model_id, CameraModelId::kOpenCV);
+  EXPECT_EQ(camera.width, 1280u);
+  EXPECT_EQ(camera.height, 960u);
+  EXPECT_EQ(camera.params, calibrated.camera.params);  // Distortion included, bit for bit.
+  EXPECT_TRUE(camera.has_prior_focal_length);
+  // Intrinsics belong to one image size.
+  ExpectInputErrorNaming([&] { assigner.CameraForImage("small.jpg", 640, 480); }, "small.jpg");
+  EXPECT_EQ(database.NumCameras(), 1u);
+
+  // Asked to, bundle adjustment may refine them: no prior.
+  options.refine_known_intrinsics = true;
+  CameraAssigner refined(options, &database);
+  const Camera initial = database.ReadCamera(refined.CameraForImage("c.jpg", 1280, 960));
+  EXPECT_EQ(initial.params, calibrated.camera.params);
+  EXPECT_FALSE(initial.has_prior_focal_length);
+  EXPECT_EQ(database.NumCameras(), 2u);
+
+  // One source of intrinsics at a time, and no other model.
+  CameraSetupOptions both = options;
+  both.intrinsics_path = WriteText("K.txt", "800 0 330\n0 810 250\n0 0 1\n");
+  EXPECT_THROW(CameraAssigner(both, &database), InputError);
+  CameraSetupOptions with_params = options;
+  with_params.camera_params = {1000, 640, 480};
+  EXPECT_THROW(CameraAssigner(with_params, &database), InputError);
+  CameraSetupOptions pinhole = options;
+  pinhole.camera_model = "PINHOLE";
+  ExpectInputErrorNaming([&] { CameraAssigner(pinhole, &database); }, "--camera-model");
+  CameraSetupOptions missing;
+  missing.camera_json_path = dir_ / "missing.json";
+  ExpectInputErrorNaming([&] { CameraAssigner(missing, &database); },
+                         missing.camera_json_path.string());
+}
+
+TEST_F(CameraSetupTest, HandMadeExifJpegDecodesAndParses) {
+  const std::string jpeg = JpegBytes(64, 48, TestExif{"Canon", "EOS 5D", 50.0, 50});
+  const cv::Mat decoded =
+      cv::imdecode(std::vector<uchar>(jpeg.begin(), jpeg.end()), cv::IMREAD_GRAYSCALE);
+  EXPECT_EQ(decoded.cols, 64);
+  EXPECT_EQ(decoded.rows, 48);
+  const std::optional<ExifData> exif = ParseJpegExif(jpeg);
+  ASSERT_TRUE(exif.has_value());
+  EXPECT_EQ(exif->make, "Canon");
+  EXPECT_EQ(exif->model, "EOS 5D");
+  EXPECT_EQ(exif->focal_length_mm, 50.0);
+  EXPECT_EQ(exif->focal_length_35mm, 50.0);
+  EXPECT_FALSE(ParseJpegExif(JpegBytes(64, 48, std::nullopt)).has_value());
+}
+
+TEST_F(CameraSetupTest, ExifFocalLengthIsTheInitialFocal) {
+  // 45 mm in 35 mm film terms on a 640-pixel-wide image: 45 / 36 * 640 = 800 px.
+  const TestExif canon{"Canon", "EOS 5D", 0, 45};
+  const fs::path exif1 = WriteText("exif1.jpg", JpegBytes(640, 480, canon));
+  const fs::path exif2 = WriteText("exif2.jpg", JpegBytes(640, 480, canon));
+  const fs::path zoomed =
+      WriteText("zoomed.jpg", JpegBytes(640, 480, TestExif{"Canon", "EOS 5D", 0, 90}));
+  const fs::path other_body =
+      WriteText("other.jpg", JpegBytes(640, 480, TestExif{"Nikon", "D700", 0, 45}));
+  const fs::path plain = WriteText("plain.jpg", JpegBytes(640, 480, std::nullopt));
+
+  Database database(dir_ / "database.db");
+  CameraAssigner assigner(CameraSetupOptions(), &database);
+  const camera_t a = assigner.CameraForImage(exif1.string(), 640, 480);
+  EXPECT_EQ(assigner.CameraForImage(exif2.string(), 640, 480), a);
+  const Camera camera = database.ReadCamera(a);
+  EXPECT_EQ(camera.model_id, CameraModelId::kSimpleRadial);
+  EXPECT_DOUBLE_EQ(camera.params[0], 800.0);
+  EXPECT_EQ(camera.params[1], 320.0);
+  EXPECT_EQ(camera.params[2], 240.0);
+  // An initial value, refined by bundle adjustment.
+  EXPECT_FALSE(camera.has_prior_focal_length);
+
+  // Another focal length or body: another camera, even at the same size and focal length.
+  const camera_t z = assigner.CameraForImage(zoomed.string(), 640, 480);
+  EXPECT_NE(z, a);
+  EXPECT_DOUBLE_EQ(database.ReadCamera(z).params[0], 1600.0);
+  const camera_t n = assigner.CameraForImage(other_body.string(), 640, 480);
+  EXPECT_NE(n, a);
+  EXPECT_DOUBLE_EQ(database.ReadCamera(n).params[0], 800.0);
+  // No EXIF: the 1.2 x max(width, height) guess.
+  const camera_t p = assigner.CameraForImage(plain.string(), 640, 480);
+  EXPECT_NE(p, a);
+  EXPECT_DOUBLE_EQ(database.ReadCamera(p).params[0], 1.2 * 640);
+  EXPECT_FALSE(database.ReadCamera(p).has_prior_focal_length);
+  EXPECT_EQ(database.NumCameras(), 4u);
+
+  // A resumed run, seeing images in the same order, finds the same cameras (the database
+  // keeps no EXIF, so equal cameras are told apart by order).
+  CameraAssigner resumed(CameraSetupOptions(), &database);
+  EXPECT_EQ(resumed.CameraForImage(exif2.string(), 640, 480), a);
+  EXPECT_EQ(resumed.CameraForImage(zoomed.string(), 640, 480), z);
+  EXPECT_EQ(resumed.CameraForImage(other_body.string(), 640, 480), n);
+  EXPECT_EQ(resumed.CameraForImage(plain.string(), 640, 480), p);
+  EXPECT_EQ(database.NumCameras(), 4u);
+}
+
+TEST_F(CameraSetupTest, ExifOverridesAndModes) {
+  const fs::path exif_path =
+      WriteText("exif.jpg", JpegBytes(640, 480, TestExif{"Canon", "EOS 5D", 0, 45}));
+  const fs::path plain_path = WriteText("plain.jpg", JpegBytes(640, 480, std::nullopt));
+  // Focal length in mm only: needs the sensor width (4 mm on a 6.4 mm sensor: 400 px).
+  const fs::path mm_path = WriteText("mm.jpg", JpegBytes(640, 480, TestExif{"Phone", "X", 4.0, 0}));
+  Database database(dir_ / "database.db");
+
+  CameraSetupOptions no_exif;
+  no_exif.use_exif = false;
+  CameraAssigner ignoring(no_exif, &database);
+  const camera_t a = ignoring.CameraForImage(exif_path.string(), 640, 480);
+  EXPECT_EQ(ignoring.CameraForImage(plain_path.string(), 640, 480), a);
+  EXPECT_DOUBLE_EQ(database.ReadCamera(a).params[0], 1.2 * 640);
+
+  CameraSetupOptions sensor;
+  sensor.sensor_width_mm = 6.4;
+  CameraAssigner with_sensor(sensor, &database);
+  EXPECT_DOUBLE_EQ(
+      database.ReadCamera(with_sensor.CameraForImage(mm_path.string(), 640, 480)).params[0], 400.0);
+  CameraAssigner without_sensor(CameraSetupOptions(), &database);
+  EXPECT_DOUBLE_EQ(
+      database.ReadCamera(without_sensor.CameraForImage(mm_path.string(), 640, 480)).params[0],
+      1.2 * 640);
+
+  // Known intrinsics win over EXIF.
+  CameraSetupOptions known;
+  known.camera_params = {1000, 320, 240, 0};
+  known.camera_model = "SIMPLE_RADIAL";
+  CameraAssigner with_known(known, &database);
+  const Camera k = database.ReadCamera(with_known.CameraForImage(exif_path.string(), 640, 480));
+  EXPECT_EQ(k.params[0], 1000.0);
+  EXPECT_TRUE(k.has_prior_focal_length);
+
+  // --single-camera: all images share the first image's camera, EXIF or not.
+  CameraSetupOptions single;
+  single.single_camera = true;
+  CameraAssigner single_assigner(single, &database);
+  const camera_t s = single_assigner.CameraForImage(exif_path.string(), 640, 480);
+  EXPECT_EQ(single_assigner.CameraForImage(plain_path.string(), 640, 480), s);
+  EXPECT_DOUBLE_EQ(database.ReadCamera(s).params[0], 800.0);
+
+  // --camera-per-image: each image its own camera, each with its own EXIF focal length.
+  CameraSetupOptions per_image;
+  per_image.camera_per_image = true;
+  CameraAssigner per_image_assigner(per_image, &database);
+  const camera_t e1 = per_image_assigner.CameraForImage(exif_path.string(), 640, 480);
+  const camera_t e2 = per_image_assigner.CameraForImage(exif_path.string(), 640, 480);
+  EXPECT_NE(e1, e2);
+  EXPECT_DOUBLE_EQ(database.ReadCamera(e2).params[0], 800.0);
 }
 
 }  // namespace
