@@ -13,12 +13,11 @@ namespace parallax {
 // coordinates, an epipolar system of too low rank).
 
 // The 5-point algorithm (Nistér, "An efficient solution to the five-point relative pose
-// problem", PAMI 2004), in the Gröbner-basis form of Stewénius, Engels & Nistér, "Recent
-// developments on direct relative orientation", ISPRS 2006: E = x X + y Y + z Z + W over the
-// null space of the 5 x 9 epipolar system; det(E) = 0 and 2 E E^T E - tr(E E^T) E = 0 give 10
-// cubics in (x, y, z); eliminating the 10 cubic monomials leaves the 10 x 10 action matrix of
-// multiplication by x on {x^2, xy, xz, y^2, yz, z^2, x, y, z, 1}, whose real eigenvectors are
-// the (up to 10) solutions. N > 5 uses the four least-squares null vectors.
+// problem", PAMI 2004): E = x X + y Y + z Z + W over the null space of the 5 x 9 epipolar
+// system; det(E) = 0 and 2 E E^T E - tr(E E^T) E = 0 give 10 cubics in (x, y, z); Gauss-Jordan
+// elimination in Nistér's monomial order leaves three equations linear in (x, y, 1) whose
+// 3 x 3 polynomial determinant is of degree 10 in z. Its real roots (Sturm sequences, then
+// Newton) give the (up to 10) solutions. N > 5 uses the four least-squares null vectors.
 void EstimateEssentialMatrixFivePoint(const std::vector<Eigen::Vector2d>& points1,
                                       const std::vector<Eigen::Vector2d>& points2,
                                       std::vector<Eigen::Matrix3d>* models);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "parallax/estimators/solvers/null_space.h"
 #include "parallax/math/polynomial.h"
 #include "parallax/util/check.h"
 
@@ -14,6 +15,12 @@ namespace {
 // a larger null space than the solver expects (degenerate configuration). Noise puts real
 // samples many orders of magnitude above it.
 constexpr double kMinRankRatio = 1e-10;
+
+// Least squares on at least this many points solves the normal equations (see
+// NullSpaceFromNormalMatrix); its rank test is on eigenvalues, the squares of singular values,
+// above the ~1e-16 rounding floor.
+constexpr Eigen::Index kMinNumPointsForNormalEquations = 16;
+constexpr double kMinEigenvalueRatio = 1e-14;
 
 using RowMajorMatrix3d = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 using Vector9d = Eigen::Matrix<double, 9, 1>;
@@ -50,6 +57,15 @@ bool LeastSquaresNullSpace(const std::vector<Eigen::Vector2d>& points1,
                            const Eigen::Matrix3d& T2,
                            Eigen::Matrix<double, 9, kNumNull>* null_space) {
   const Eigen::Index num_points = static_cast<Eigen::Index>(points1.size());
+  if (num_points >= kMinNumPointsForNormalEquations) {
+    Eigen::Matrix<double, Eigen::Dynamic, 9> A(num_points, 9);
+    for (Eigen::Index i = 0; i < num_points; ++i) {
+      A.row(i) = EpipolarRow(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]))
+                     .transpose();
+    }
+    const Eigen::Matrix<double, 9, 9> normal = A.transpose() * A;
+    return NullSpaceFromNormalMatrix<kNumNull>(normal, null_space, kMinEigenvalueRatio);
+  }
   Eigen::Matrix<double, Eigen::Dynamic, 9> A =
       Eigen::Matrix<double, Eigen::Dynamic, 9>::Zero(std::max<Eigen::Index>(num_points, 9), 9);
   for (Eigen::Index i = 0; i < num_points; ++i) {
@@ -118,18 +134,13 @@ void EstimateFundamentalMatrixSevenPoint(const std::vector<Eigen::Vector2d>& poi
 
   Eigen::Matrix<double, 9, 2> null_space;
   if (num_points == 7) {
-    // Minimal case without the heap: the last two columns of Q in A^T = QR span the null
-    // space of A; column pivoting exposes a rank below 7 in R's last diagonal entry.
-    Eigen::Matrix<double, 9, 7> A_transpose;
+    // Minimal case: elimination exposes a rank below 7 in its last pivot.
+    Eigen::Matrix<double, 7, 9> A;
     for (int i = 0; i < 7; ++i) {
-      A_transpose.col(i) =
-          EpipolarRow(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]));
+      A.row(i) = EpipolarRow(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]))
+                     .transpose();
     }
-    const Eigen::ColPivHouseholderQR<Eigen::Matrix<double, 9, 7>> qr(A_transpose);
-    const auto& R = qr.matrixR();
-    if (!(std::abs(R(6, 6)) > kMinRankRatio * std::abs(R(0, 0)))) return;
-    const Eigen::Matrix<double, 9, 9> Q = qr.householderQ();
-    null_space = Q.rightCols<2>();
+    if (!NullSpaceByElimination(A, &null_space, kMinRankRatio)) return;
   } else if (!LeastSquaresNullSpace<2>(points1, points2, T1, T2, &null_space)) {
     return;
   }

@@ -5,12 +5,17 @@
 #include <cmath>
 
 #include "parallax/estimators/solvers/fundamental_matrix.h"
+#include "parallax/estimators/solvers/null_space.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
 namespace {
 
 constexpr double kMinRankRatio = 1e-10;
+// Least squares on at least this many points solves the normal equations (see
+// NullSpaceFromNormalMatrix), with its rank test on eigenvalues.
+constexpr size_t kMinNumPointsForNormalEquations = 16;
+constexpr double kMinEigenvalueRatio = 1e-14;
 
 using RowMajorMatrix3d = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 using Vector9d = Eigen::Matrix<double, 9, 1>;
@@ -50,18 +55,15 @@ void EstimateHomographyMatrix(const std::vector<Eigen::Vector2d>& points1,
 
   Vector9d h;
   if (num_points == 4) {
-    // Minimal case without the heap: the last column of Q in A^T = QR is the null vector;
-    // column pivoting exposes a rank below 8 in R's last diagonal entry.
+    // Minimal case: elimination exposes a rank below 8 in its last pivot.
     Eigen::Matrix<double, 8, 9> A;
     for (int i = 0; i < 4; ++i) {
       AddHomographyRows(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]),
                         A.middleRows<2>(2 * i));
     }
-    const Eigen::ColPivHouseholderQR<Eigen::Matrix<double, 9, 8>> qr(A.transpose());
-    const auto& R = qr.matrixR();
-    if (!(std::abs(R(7, 7)) > kMinRankRatio * std::abs(R(0, 0)))) return;
-    const Eigen::Matrix<double, 9, 9> Q = qr.householderQ();
-    h = Q.col(8);
+    Eigen::Matrix<double, 9, 1> null_vector;
+    if (!NullSpaceByElimination(A, &null_vector, kMinRankRatio)) return;
+    h = null_vector;
   } else {
     const Eigen::Index num_rows = static_cast<Eigen::Index>(2 * num_points);
     Eigen::Matrix<double, Eigen::Dynamic, 9> A(num_rows, 9);
@@ -69,10 +71,15 @@ void EstimateHomographyMatrix(const std::vector<Eigen::Vector2d>& points1,
       AddHomographyRows(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]),
                         A.middleRows<2>(static_cast<Eigen::Index>(2 * i)));
     }
-    const Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 9>> svd(A, Eigen::ComputeFullV);
-    const auto& singular_values = svd.singularValues();
-    if (!(singular_values(7) > kMinRankRatio * singular_values(0))) return;
-    h = svd.matrixV().col(8);
+    if (num_points >= kMinNumPointsForNormalEquations) {
+      const Eigen::Matrix<double, 9, 9> normal = A.transpose() * A;
+      if (!NullSpaceFromNormalMatrix<1>(normal, &h, kMinEigenvalueRatio)) return;
+    } else {
+      const Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 9>> svd(A, Eigen::ComputeFullV);
+      const auto& singular_values = svd.singularValues();
+      if (!(singular_values(7) > kMinRankRatio * singular_values(0))) return;
+      h = svd.matrixV().col(8);
+    }
   }
 
   const Eigen::Matrix3d normalized_H = Eigen::Map<const RowMajorMatrix3d>(h.data());
