@@ -12,6 +12,7 @@
 #include "parallax/geometry/epipolar.h"
 #include "parallax/geometry/essential_matrix.h"
 #include "parallax/geometry/triangulation.h"
+#include "parallax/math/random.h"
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
 
@@ -52,6 +53,91 @@ struct TranslationEstimator {
     }
   }
 };
+
+// Largest numbers of models one minimal sample yields: the multiplicity of the a-contrario
+// test below.
+constexpr int kMaxNumEssentialModels = 10;
+constexpr int kMaxNumFundamentalModels = 3;
+constexpr int kMaxNumHomographyModels = 1;
+// Re-paired matches evaluated to estimate the chance that an unrelated match is an inlier.
+constexpr size_t kMaxNumChancePairs = 4096;
+
+// log10 of the binomial tail P[X >= k], X ~ Binomial(n, p).
+double Log10BinomialTail(size_t n, size_t k, double p) {
+  if (k == 0) return 0.0;
+  if (k > n || p <= 0.0) return -std::numeric_limits<double>::infinity();
+  if (p >= 1.0) return 0.0;
+  const double log_p = std::log(p), log_q = std::log1p(-p);
+  const double lgamma_n = std::lgamma(static_cast<double>(n) + 1.0);
+  double max_term = -std::numeric_limits<double>::infinity();
+  double sum = 0.0;  // Of exp(term - max_term).
+  for (size_t j = k; j <= n; ++j) {
+    const double jd = static_cast<double>(j), rest = static_cast<double>(n - j);
+    const double term =
+        lgamma_n - std::lgamma(jd + 1.0) - std::lgamma(rest + 1.0) + jd * log_p + rest * log_q;
+    if (term > max_term) {
+      sum = sum * std::exp(max_term - term) + 1.0;
+      max_term = term;
+    } else {
+      sum += std::exp(term - max_term);
+      // Past the mode the terms fall geometrically: the rest no longer counts.
+      if (term < max_term - 40.0) break;
+    }
+  }
+  return (max_term + std::log(sum)) / std::log(10.0);
+}
+
+// The a-contrario number of false alarms of a model with `num_inliers` of the n matches
+// (Moisan & Stival, "A probabilistic criterion to detect rigid point matches between two
+// images and estimate the fundamental matrix", IJCV 2004): the expected number of models,
+// among the up to models_per_sample * C(n, s) that minimal samples of s matches yield, that
+// would explain as many matches if these were chance pairings,
+//   NFA = models_per_sample * C(n, s) * P[Binomial(n - s, p) >= num_inliers - s].
+// p, the chance that an unrelated match is an inlier, is measured on the matched keypoints
+// themselves re-paired (x1_i with x2_j, i != j), so it reflects where keypoints lie in these
+// images (often a small part of them) rather than a uniform spread.
+template <typename Estimator>
+double Log10NumFalseAlarms(const Estimator& estimator, const std::vector<Eigen::Vector2d>& points1,
+                           const std::vector<Eigen::Vector2d>& points2,
+                           const Eigen::Matrix3d& model, double max_error, size_t num_inliers,
+                           int models_per_sample) {
+  const size_t n = points1.size();
+  constexpr size_t s = Estimator::kMinNumSamples;
+  if (num_inliers <= s || n <= s) return std::numeric_limits<double>::infinity();
+  std::vector<Eigen::Vector2d> chance1, chance2;
+  if (n * (n - 1) <= kMaxNumChancePairs) {
+    for (size_t i = 0; i < n; ++i) {
+      for (size_t j = 0; j < n; ++j) {
+        if (i == j) continue;
+        chance1.push_back(points1[i]);
+        chance2.push_back(points2[j]);
+      }
+    }
+  } else {
+    for (size_t pair = 0; pair < kMaxNumChancePairs; ++pair) {
+      const auto i = static_cast<size_t>(RandomUniformInteger(0, static_cast<int64_t>(n) - 1));
+      auto j = static_cast<size_t>(RandomUniformInteger(0, static_cast<int64_t>(n) - 2));
+      if (j >= i) ++j;
+      chance1.push_back(points1[i]);
+      chance2.push_back(points2[j]);
+    }
+  }
+  std::vector<double> squared_residuals;
+  estimator.Residuals(chance1, chance2, model, &squared_residuals);
+  const double max_squared_error = max_error * max_error;
+  size_t num_chance_inliers = 0;
+  for (const double residual : squared_residuals)
+    num_chance_inliers += residual <= max_squared_error;
+  // One more inlier than seen: never p = 0 from a finite sample.
+  const double p = static_cast<double>(num_chance_inliers + 1) /
+                   static_cast<double>(squared_residuals.size() + 1);
+  const double log10_num_samples =
+      (std::lgamma(static_cast<double>(n) + 1.0) - std::lgamma(static_cast<double>(s) + 1.0) -
+       std::lgamma(static_cast<double>(n - s) + 1.0)) /
+      std::log(10.0);
+  return std::log10(static_cast<double>(models_per_sample)) + log10_num_samples +
+         Log10BinomialTail(n - s, num_inliers - s, p);
+}
 
 RansacOptions MakeRansacOptions(const TwoViewGeometryOptions& options, double max_error) {
   RansacOptions ransac_options;
@@ -268,6 +354,8 @@ void TwoViewGeometryOptions::Check() const {
   PARALLAX_CHECK(min_E_F_inlier_ratio >= 0.0 && min_E_F_inlier_ratio <= 1.0);
   PARALLAX_CHECK(max_H_inlier_ratio >= 0.0 && max_H_inlier_ratio <= 1.0);
   PARALLAX_CHECK(watermark_min_inlier_ratio >= 0.0 && watermark_min_inlier_ratio <= 1.0);
+  PARALLAX_CHECK_GT(min_inlier_ratio_trials_multiplier, 0.0);
+  PARALLAX_CHECK_GT(max_num_false_alarms, 0.0);
 }
 
 TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
@@ -299,66 +387,93 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
   const size_t min_num_inliers = std::max<size_t>(static_cast<size_t>(options.min_num_inliers), 1);
   if (valid_matches.size() < min_num_inliers) return geometry;
 
-  const double num_valid = static_cast<double>(valid_matches.size());
-  const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>
-      F_ransac(MakeRansacOptions(options, options.max_error_px));
-  const auto F_report = F_ransac.Estimate(matched1, matched2);
-  const size_t F_num_inliers = F_report.success ? F_report.num_inliers : 0;
+  const size_t num_valid = valid_matches.size();
 
-  // E and H only change the classification when they explain a set fraction of F's inliers
-  // (min_E_F_inlier_ratio, max_H_inlier_ratio), so their RANSAC need not search for lower
-  // inlier ratios: on a non-planar scene this cuts H's trials from the cap to a few hundred.
-  const auto raise_min_inlier_ratio = [&](RansacOptions ransac_options, double fraction,
-                                          size_t reference_num_inliers) {
-    ransac_options.min_inlier_ratio =
-        std::max(ransac_options.min_inlier_ratio,
-                 std::min(1.0, fraction * static_cast<double>(reference_num_inliers) / num_valid));
+  // Trial budgets. A pair needs min_num_inliers inliers, and F and H only change the outcome
+  // when they explain a set fraction of the other model's inliers, so each RANSAC need only
+  // search for models with at least that many inliers (`num_inliers_sought`). The chance
+  // matches of a non-overlapping pair are few (15-35 on templeRing), which makes this a few
+  // dozen to a few hundred trials instead of the cap.
+  const auto bounded_options = [&](double max_error, size_t sample_size,
+                                   double num_inliers_sought) {
+    RansacOptions ransac_options = MakeRansacOptions(options, max_error);
+    const double ratio = std::clamp(num_inliers_sought / static_cast<double>(num_valid),
+                                    options.min_inlier_ratio, 1.0);
+    const size_t bound = ComputeNumRansacTrials(
+        static_cast<size_t>(std::ceil(ratio * static_cast<double>(num_valid))), num_valid,
+        sample_size, options.confidence, options.min_inlier_ratio_trials_multiplier);
+    ransac_options.max_num_trials =
+        static_cast<int>(std::clamp<size_t>(bound, 1, static_cast<size_t>(options.max_num_trials)));
+    ransac_options.min_inlier_ratio = 0.0;  // Bounded here.
     return ransac_options;
   };
 
   const bool calibrated = options.use_essential_when_calibrated && camera1.has_prior_focal_length &&
                           camera2.has_prior_focal_length && camera1.VerifyParams() &&
                           camera2.VerifyParams();
+  // E first when the intrinsics are known: it is the model sought, and its 5-point samples
+  // find a given inlier ratio in far fewer trials than F's 7-point ones.
   RansacReport<Eigen::Matrix3d> E_report;
+  std::vector<Eigen::Vector2d> normalized1, normalized2;
+  double E_max_error = 0.0;
   if (calibrated) {
-    std::vector<Eigen::Vector2d> normalized1(matched1.size()), normalized2(matched2.size());
+    normalized1.resize(matched1.size());
+    normalized2.resize(matched2.size());
     for (size_t i = 0; i < matched1.size(); ++i) {
       normalized1[i] = camera1.CamFromImg(matched1[i]);
       normalized2[i] = camera2.CamFromImg(matched2[i]);
     }
-    const double max_error = 0.5 * (camera1.CamFromImgThreshold(options.max_error_px) +
-                                    camera2.CamFromImgThreshold(options.max_error_px));
+    E_max_error = 0.5 * (camera1.CamFromImgThreshold(options.max_error_px) +
+                         camera2.CamFromImgThreshold(options.max_error_px));
     const LoRansac<EssentialMatrixFivePointEstimator, EssentialMatrixEightPointEstimator> E_ransac(
-        raise_min_inlier_ratio(MakeRansacOptions(options, max_error), options.min_E_F_inlier_ratio,
-                               F_num_inliers));
+        bounded_options(E_max_error, EssentialMatrixFivePointEstimator::kMinNumSamples,
+                        static_cast<double>(min_num_inliers)));
     E_report = E_ransac.Estimate(normalized1, normalized2);
   }
   const size_t E_num_inliers = E_report.success ? E_report.num_inliers : 0;
 
-  // H is compared with E's inliers when E is used, with F's otherwise.
-  const size_t H_reference_num_inliers = E_num_inliers > 0 && F_num_inliers > 0
-                                             ? std::min(E_num_inliers, F_num_inliers)
-                                             : std::max(E_num_inliers, F_num_inliers);
-  const LoRansac<HomographyMatrixEstimator> H_ransac(
-      raise_min_inlier_ratio(MakeRansacOptions(options, options.max_error_px),
-                             options.max_H_inlier_ratio, H_reference_num_inliers));
+  // Once E is found, F only matters when it explains more than E's inliers divided by
+  // min_E_F_inlier_ratio (the pair is then uncalibrated); otherwise it must reach the minimum.
+  const bool E_found = E_num_inliers >= min_num_inliers;
+  const double F_num_inliers_sought =
+      E_found ? static_cast<double>(E_num_inliers) / std::max(options.min_E_F_inlier_ratio, 1e-9)
+              : static_cast<double>(min_num_inliers);
+  const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>
+      F_ransac(bounded_options(options.max_error_px,
+                               FundamentalMatrixSevenPointEstimator::kMinNumSamples,
+                               F_num_inliers_sought));
+  const auto F_report = F_ransac.Estimate(matched1, matched2);
+  const size_t F_num_inliers = F_report.success ? F_report.num_inliers : 0;
+
+  // H only changes the classification when it explains more than max_H_inlier_ratio of the
+  // inliers of the epipolar model chosen (or, with none, when it reaches the minimum).
+  const auto ratio = [](size_t numerator, size_t denominator) {
+    return denominator == 0 ? std::numeric_limits<double>::infinity()
+                            : static_cast<double>(numerator) / static_cast<double>(denominator);
+  };
+  const bool calibrated_branch =
+      E_found && ratio(E_num_inliers, F_num_inliers) >= options.min_E_F_inlier_ratio;
+  const bool uncalibrated_branch = !calibrated_branch && F_num_inliers >= min_num_inliers;
+  const double H_num_inliers_sought =
+      calibrated_branch     ? options.max_H_inlier_ratio * static_cast<double>(E_num_inliers)
+      : uncalibrated_branch ? options.max_H_inlier_ratio * static_cast<double>(F_num_inliers)
+                            : static_cast<double>(min_num_inliers);
+  const LoRansac<HomographyMatrixEstimator> H_ransac(bounded_options(
+      options.max_error_px, HomographyMatrixEstimator::kMinNumSamples, H_num_inliers_sought));
   const auto H_report = H_ransac.Estimate(matched1, matched2);
   const size_t H_num_inliers = H_report.success ? H_report.num_inliers : 0;
 
   // COLMAP's classification: prefer the calibrated model when E explains (nearly) all of
   // F's inliers; call the pair planar or panoramic when H explains most of them too.
-  const auto ratio = [](size_t numerator, size_t denominator) {
-    return denominator == 0 ? std::numeric_limits<double>::infinity()
-                            : static_cast<double>(numerator) / static_cast<double>(denominator);
-  };
   const std::vector<char>* inlier_mask = nullptr;
   size_t num_inliers = 0;
+  const RansacReport<Eigen::Matrix3d>* chosen = nullptr;
   const auto choose = [&](const RansacReport<Eigen::Matrix3d>& report, size_t count) {
     inlier_mask = &report.inlier_mask;
     num_inliers = count;
+    chosen = &report;
   };
-  if (E_num_inliers >= min_num_inliers &&
-      ratio(E_num_inliers, F_num_inliers) >= options.min_E_F_inlier_ratio) {
+  if (calibrated_branch) {
     if (E_num_inliers >= F_num_inliers) {
       choose(E_report, E_num_inliers);
     } else {
@@ -370,7 +485,7 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
     } else {
       geometry.config = TwoViewGeometry::kCalibrated;
     }
-  } else if (F_num_inliers >= min_num_inliers) {
+  } else if (uncalibrated_branch) {
     choose(F_report, F_num_inliers);
     if (ratio(H_num_inliers, F_num_inliers) > options.max_H_inlier_ratio) {
       geometry.config = TwoViewGeometry::kPlanarOrPanoramic;
@@ -396,9 +511,35 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
     return geometry;
   }
 
+  // Chance matches: RANSAC always finds some model that explains a few of them, more the more
+  // matches there are. Keep the pair only when so many inliers would be unexpected.
+  double log10_num_false_alarms = 0.0;
+  if (chosen == &E_report) {
+    log10_num_false_alarms =
+        Log10NumFalseAlarms(EssentialMatrixFivePointEstimator(), normalized1, normalized2,
+                            E_report.model, E_max_error, num_inliers, kMaxNumEssentialModels);
+  } else if (chosen == &F_report) {
+    log10_num_false_alarms = Log10NumFalseAlarms(FundamentalMatrixSevenPointEstimator(), matched1,
+                                                 matched2, F_report.model, options.max_error_px,
+                                                 num_inliers, kMaxNumFundamentalModels);
+  } else {
+    log10_num_false_alarms =
+        Log10NumFalseAlarms(HomographyMatrixEstimator(), matched1, matched2, H_report.model,
+                            options.max_error_px, num_inliers, kMaxNumHomographyModels);
+  }
+  if (log10_num_false_alarms > std::log10(options.max_num_false_alarms)) {
+    PARALLAX_LOG(Debug) << "Two-view inliers (" << num_inliers << " of " << num_valid
+                        << ") could be chance: 10^" << log10_num_false_alarms
+                        << " false alarms expected; degenerate pair";
+    geometry.config = TwoViewGeometry::kDegenerate;
+    return geometry;
+  }
+
   if (E_report.success) geometry.E = E_report.model;
   if (H_report.success) geometry.H = H_report.model;
-  if (F_report.success) {
+  // When E explains the pair, F's RANSAC only searched for a better F and may have stopped
+  // early: the F implied by E is then the better estimate.
+  if (F_report.success && chosen != &E_report) {
     geometry.F = F_report.model;
   } else if (E_report.success) {
     geometry.F = FundamentalFromEssential(E_report.model, camera1.CalibrationMatrix(),

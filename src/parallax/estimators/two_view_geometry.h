@@ -15,7 +15,16 @@ struct TwoViewGeometryOptions {
   double max_error_px = 4.0;          // RANSAC threshold in pixels (F, H; E scaled by focal).
   double confidence = 0.9999;
   int max_num_trials = 10000;
+  // Lowest inlier ratio RANSAC searches for (bounds its trials; COLMAP's 0.25). The bound is
+  // raised further to the fewest inliers that could change the outcome (min_num_inliers, and
+  // the E/F and H/F ratios below), so chance matches are rejected in few trials.
   double min_inlier_ratio = 0.25;
+  // Multiplier on the number of trials that bound gives (the adaptive stop keeps RANSAC's 3).
+  double min_inlier_ratio_trials_multiplier = 1.0;
+  // Significance: a pair is kept only when at most this many models would be expected to
+  // explain as many of its matches by chance (a-contrario number of false alarms; Moisan &
+  // Stival 2004). Without it, random matches pass once a pair has ~100 of them.
+  double max_num_false_alarms = 1.0;
   // Planar/panoramic classification (COLMAP's rules).
   double min_E_F_inlier_ratio = 0.95;  // E explains F's inliers: calibrated.
   double max_H_inlier_ratio = 0.8;     // H explains more than this of the inliers: planar.
@@ -27,9 +36,10 @@ struct TwoViewGeometryOptions {
   void Check() const;
 };
 
-// Verifies putative matches between two images with LO-RANSAC around the normalized
-// 8-point fundamental matrix (7-point samples), the 5-point essential matrix when the
-// cameras are calibrated, and the 4-point homography; classifies the pair as COLMAP does.
+// Verifies putative matches between two images with LO-RANSAC around the 5-point essential
+// matrix when the cameras are calibrated (tried first), the 7-point fundamental matrix (8-point
+// refinement) and the 4-point homography; classifies the pair as COLMAP does, then rejects it
+// when its inliers could be chance (max_num_false_alarms).
 // points1/points2 are all keypoints of each image in pixels.
 TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
                                         const std::vector<Eigen::Vector2d>& points1,

@@ -217,7 +217,12 @@ TEST(EstimateTwoViewGeometry, PlanarSceneIsDetected) {
       Scene scene = MakeScene(1000, noise, noise > 0 ? 0.4 : 0.0, Structure::kPlane);
       scene.camera1.has_prior_focal_length = calibrated;
       scene.camera2.has_prior_focal_length = calibrated;
-      const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
+      // H's transfer error carries the noise of both images: at 1.5 px H keeps ~85 % of the
+      // plane's matches, F (Sampson error) nearly all plus some outliers, which puts H/F at
+      // the 0.8 planar threshold; 2 px keeps ~95 % (see PureRotationIsPanoramic).
+      TwoViewGeometryOptions options = NoisyOptions();
+      options.max_error_px = 2.0;
+      const TwoViewGeometry geometry = Estimate(scene, options);
       EXPECT_EQ(geometry.config, TwoViewGeometry::kPlanar)
           << "noise " << noise << " calibrated " << calibrated;
       ExpectGoodInliers(scene, geometry);
@@ -262,6 +267,85 @@ TEST(EstimateTwoViewGeometry, TooFewMatchesIsDegenerate) {
   geometry = Estimate(outliers);
   EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
   EXPECT_TRUE(geometry.inlier_matches.empty());
+}
+
+// n matches between random keypoints: uniform over the image, or clustered in a 250 x 200
+// box as on an object before a black background (templeRing), where chance fits are likelier.
+Scene RandomMatches(int num_matches, bool clustered, bool calibrated) {
+  Scene scene;
+  scene.camera1.has_prior_focal_length = calibrated;
+  scene.camera2.has_prior_focal_length = calibrated;
+  const auto random_point = [&] {
+    return clustered ? Eigen::Vector2d(RandomUniformReal(400, 650), RandomUniformReal(300, 500))
+                     : RandomPixel();
+  };
+  for (int i = 0; i < num_matches; ++i) {
+    scene.points1.push_back(random_point());
+    scene.points2.push_back(random_point());
+    scene.matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(i)});
+    scene.is_inlier.push_back(0);
+  }
+  return scene;
+}
+
+TEST(EstimateTwoViewGeometry, RandomMatchesAreRejected) {
+  SetPRNGSeed(12);
+  // Without the significance test most of these pass from ~100 matches on: RANSAC always
+  // finds a model that explains min_num_inliers of enough chance matches.
+  TwoViewGeometryOptions without_significance;
+  without_significance.max_num_false_alarms = std::numeric_limits<double>::infinity();
+  int num_accepted_without = 0, num_tried_without = 0;
+  for (const auto& [num_matches, num_pairs] :
+       {std::pair{20, 6}, {30, 6}, {50, 6}, {100, 2}, {200, 1}, {500, 1}}) {
+    for (int pair = 0; pair < num_pairs; ++pair) {
+      for (const bool clustered : {false, true}) {
+        for (const bool calibrated : {false, true}) {
+          const Scene scene = RandomMatches(num_matches, clustered, calibrated);
+          const TwoViewGeometry geometry = Estimate(scene);
+          EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate)
+              << num_matches << " matches, clustered " << clustered << ", calibrated " << calibrated
+              << ": " << geometry.inlier_matches.size() << " inliers";
+          EXPECT_TRUE(geometry.inlier_matches.empty());
+          if (num_matches >= 100 && num_matches <= 200) {
+            ++num_tried_without;
+            num_accepted_without +=
+                Estimate(scene, without_significance).config != TwoViewGeometry::kDegenerate;
+          }
+        }
+      }
+    }
+  }
+  std::cerr << num_accepted_without << " of " << num_tried_without
+            << " random pairs of 100-200 matches pass without the significance test\n";
+  EXPECT_GE(num_accepted_without, num_tried_without / 3);
+}
+
+TEST(EstimateTwoViewGeometry, RealPairsWithFortyPercentOutliersAreKept) {
+  SetPRNGSeed(13);
+  // From few matches (the weakest pairs a reconstruction links) to many.
+  for (const int num_matches : {30, 50, 100, 300}) {
+    for (int pair = 0; pair < 4; ++pair) {
+      for (const bool calibrated : {false, true}) {
+        Scene scene = MakeScene(num_matches, 0.5, 0.4, Structure::kGeneral);
+        scene.camera1.has_prior_focal_length = calibrated;
+        scene.camera2.has_prior_focal_length = calibrated;
+        const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
+        const InlierCounts counts = CountInliers(scene, geometry);
+        if (counts.num_true_inliers < 15) continue;  // Too few to verify whatever the test.
+        // With few matches F may pick up an outlier or two more than E, which makes a
+        // calibrated pair uncalibrated (COLMAP's rule): verified either way.
+        const bool verified = geometry.config == TwoViewGeometry::kUncalibrated ||
+                              (calibrated && geometry.config == TwoViewGeometry::kCalibrated);
+        EXPECT_TRUE(verified) << num_matches << " matches (" << counts.num_true_inliers
+                              << " inliers), calibrated " << calibrated << ": config "
+                              << geometry.config;
+        EXPECT_GE(counts.inliers_kept, 0.85 * counts.num_true_inliers);
+        // A uniform outlier lands within 1.5 px of its epipolar line about once in 200, and
+        // fitted to few matches F's seven degrees of freedom bend to take in a few more.
+        EXPECT_LE(counts.outliers_kept, 4 + 0.02 * counts.inliers_kept);
+      }
+    }
+  }
 }
 
 TEST(EstimateTwoViewGeometry, NonFiniteKeypointsAreIgnored) {
