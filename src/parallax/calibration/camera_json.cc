@@ -100,7 +100,8 @@ CalibratedCamera ParseCameraJson(const std::string& text, const std::string& sou
   Json root;
   try {
     root = Json::parse(text);
-  } catch (const Json::parse_error& error) {
+  } catch (const Json::exception& error) {
+    // parse_error, and out_of_range for a number beyond double (1e400).
     throw InputError(source + ": not valid JSON: " + error.what());
   }
   if (!root.is_object()) throw InputError(source + ": expected a JSON object");

@@ -149,6 +149,16 @@ TEST(CameraJson, MalformedInputNamesFileAndField) {
   std::filesystem::remove_all(dir);
 }
 
+// Regression (issue 8): a number beyond double threw nlohmann's out_of_range, which is not a
+// parse_error, so the message lost the file name.
+TEST(CameraJson, NumbersBeyondDoubleAreMalformedJson) {
+  const std::string text =
+      R"({"model": "OPENCV", "width": 640, "height": 1e400, "fx": 500, "fy": 501, "cx": 320,
+          "cy": 240, "k1": 0, "k2": 0, "p1": 0, "p2": 0})";
+  ExpectInputError([&] { ParseCameraJson(text, "cam.json"); }, "cam.json", "not valid JSON");
+  ExpectInputError([&] { ParseCameraJson("-1e999", "cam.json"); }, "cam.json", "not valid JSON");
+}
+
 TEST(CameraJson, K3ShiftIsMeasuredAtTheFarthestCorner) {
   CalibratedCamera calibrated;
   calibrated.camera.model_id = CameraModelId::kOpenCV;

@@ -2,7 +2,9 @@
 
 #include <exception>
 #include <iostream>
+#include <string>
 
+#include "parallax/util/file.h"
 #include "parallax/util/logging.h"
 
 namespace parallax::cli {
@@ -24,7 +26,12 @@ int RunCommand(CLI::App& app, int argc, char** argv, const VerbosityFlags& flags
   try {
     return body();
   } catch (const std::exception& error) {
-    std::cerr << "error: " << error.what() << std::endl;
+    // Some libraries' messages (OpenCV's, SQLite's) span lines; the user gets one.
+    std::string message = error.what();
+    for (char& c : message) {
+      if (c == '\n' || c == '\r') c = ' ';
+    }
+    std::cerr << "error: " << Trim(message) << std::endl;
     return 1;
   }
 }

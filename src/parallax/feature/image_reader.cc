@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include <system_error>
 
 #include "parallax/util/check.h"
+#include "parallax/util/file.h"
 
 namespace parallax {
 namespace {
@@ -277,6 +279,54 @@ Bitmap ToBitmap(const std::filesystem::path& path, const cv::Mat& decoded) {
   return bitmap;
 }
 
+// Bytes read before the whole file: enough for every header we parse (a JPEG's frame header
+// may follow a 64 KiB EXIF segment and other APPn segments).
+constexpr uintmax_t kHeaderProbeBytes = 1 << 20;
+
+// cv::Exception messages span several lines; the CLI prints one.
+std::string OneLine(std::string text) {
+  for (char& c : text) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return Trim(text);
+}
+
+bool HasImageExtension(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".jpg" || extension == ".jpeg" || extension == ".png" ||
+         extension == ".tif" || extension == ".tiff" || extension == ".bmp";
+}
+
+struct CheckedHeader {
+  ImageFormat format;
+  ImageSize size;
+};
+
+// The format and size from the header, refusing unknown formats, unreadable headers and
+// images over the pixel limit. `bytes` is the file's head; when it is not the whole file a
+// header that runs past it is "not found yet" rather than malformed, so the check is skipped
+// and DecodeBitmap repeats it on the whole file.
+CheckedHeader CheckHeader(std::string_view bytes, const std::filesystem::path& source,
+                          const ImageReaderOptions& options, bool complete) {
+  MemoryByteSource byte_source(bytes);
+  const ImageFormat format = DetectFormat(byte_source);
+  if (format == ImageFormat::kUnknown) Fail(source, "not a PNG, JPEG, TIFF or BMP image");
+  const std::optional<ImageSize> size = ReadSize(format, byte_source);
+  if (!size) {
+    if (!complete) return {format, ImageSize{}};
+    Fail(source, std::string("malformed or truncated ") + FormatName(format) + " header");
+  }
+  const int64_t num_pixels = int64_t{size->width} * size->height;
+  if (num_pixels > options.max_image_pixels) {
+    Fail(source, "image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
+                     " pixels, more than max_image_pixels = " +
+                     std::to_string(options.max_image_pixels));
+  }
+  return {format, *size};
+}
+
 }  // namespace
 
 void ImageReaderOptions::Check() const { PARALLAX_CHECK_GT(max_image_pixels, 0); }
@@ -293,6 +343,16 @@ std::optional<ImageSize> ReadImageSize(const std::filesystem::path& path) {
   return ReadSize(DetectFormat(source), source);
 }
 
+ImageFormat DetectImageFormatFromBytes(std::string_view bytes) {
+  MemoryByteSource source(bytes);
+  return DetectFormat(source);
+}
+
+std::optional<ImageSize> ReadImageSizeFromBytes(std::string_view bytes) {
+  MemoryByteSource source(bytes);
+  return ReadSize(DetectFormat(source), source);
+}
+
 Bitmap ReadBitmap(const std::filesystem::path& path, const ImageReaderOptions& options) {
   options.Check();
   std::error_code error;
@@ -303,54 +363,80 @@ Bitmap ReadBitmap(const std::filesystem::path& path, const ImageReaderOptions& o
   if (error) Fail(path, "cannot read the file size");
   if (file_size == 0) Fail(path, "empty file");
   if (file_size > static_cast<uintmax_t>(INT32_MAX)) Fail(path, "file larger than 2 GiB");
-  std::string data(file_size, '\0');
-  stream.read(data.data(), static_cast<std::streamsize>(file_size));
-  if (stream.gcount() != static_cast<std::streamsize>(file_size)) Fail(path, "read failed");
-
-  MemoryByteSource source(data);
-  const ImageFormat format = DetectFormat(source);
-  if (format == ImageFormat::kUnknown) Fail(path, "not a PNG, JPEG, TIFF or BMP image");
-  const std::optional<ImageSize> size = ReadSize(format, source);
-  if (!size) Fail(path, std::string("malformed or truncated ") + FormatName(format) + " header");
-  const int64_t num_pixels = int64_t{size->width} * size->height;
-  if (num_pixels > options.max_image_pixels) {
-    Fail(path, "image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
-                   " pixels, more than max_image_pixels = " +
-                   std::to_string(options.max_image_pixels));
+  // Only the header first: a huge image is refused before the whole file is read.
+  std::string data(std::min<uintmax_t>(file_size, kHeaderProbeBytes), '\0');
+  stream.read(data.data(), static_cast<std::streamsize>(data.size()));
+  if (stream.gcount() != static_cast<std::streamsize>(data.size())) Fail(path, "read failed");
+  CheckHeader(data, path, options, /*complete=*/data.size() == file_size);
+  if (data.size() < file_size) {
+    const size_t head_size = data.size();
+    data.resize(file_size);
+    stream.read(data.data() + head_size, static_cast<std::streamsize>(file_size - head_size));
+    if (stream.gcount() != static_cast<std::streamsize>(file_size - head_size)) {
+      Fail(path, "read failed");
+    }
   }
-  if (!LooksComplete(format, data)) Fail(path, std::string("truncated ") + FormatName(format));
+  return DecodeBitmap(data, path, options);
+}
+
+Bitmap DecodeBitmap(std::string_view bytes, const std::filesystem::path& source,
+                    const ImageReaderOptions& options) {
+  options.Check();
+  if (bytes.empty()) Fail(source, "empty file");
+  if (bytes.size() > static_cast<size_t>(INT32_MAX)) Fail(source, "file larger than 2 GiB");
+  const auto [format, size] = CheckHeader(bytes, source, options, /*complete=*/true);
+  if (!LooksComplete(format, bytes)) Fail(source, std::string("truncated ") + FormatName(format));
 
   cv::Mat decoded;
   try {
-    const cv::Mat buffer(1, static_cast<int>(data.size()), CV_8UC1, data.data());
+    // imdecode does not write to its input.
+    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1,
+                         const_cast<char*>(bytes.data()));
     decoded = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& exception) {
-    Fail(path, std::string("cannot decode ") + FormatName(format) + ": " + exception.what());
+    Fail(source, std::string("cannot decode ") + FormatName(format) + ": " +
+                     OneLine(exception.what()));
   }
-  if (decoded.empty()) Fail(path, std::string("cannot decode ") + FormatName(format));
-  if (decoded.cols != size->width || decoded.rows != size->height) {
-    Fail(path, "decoded size " + std::to_string(decoded.cols) + "x" +
-                   std::to_string(decoded.rows) + " differs from the header's " +
-                   std::to_string(size->width) + "x" + std::to_string(size->height));
+  if (decoded.empty()) Fail(source, std::string("cannot decode ") + FormatName(format));
+  if (decoded.cols != size.width || decoded.rows != size.height) {
+    Fail(source, "decoded size " + std::to_string(decoded.cols) + "x" +
+                     std::to_string(decoded.rows) + " differs from the header's " +
+                     std::to_string(size.width) + "x" + std::to_string(size.height));
   }
-  return ToBitmap(path, decoded);
+  return ToBitmap(source, decoded);
 }
 
-std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& dir) {
+std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& dir,
+                                                  std::vector<RejectedImageFile>* rejected) {
   std::error_code error;
   if (!std::filesystem::is_directory(dir, error)) {
     throw InputError(dir.string() + ": not a directory");
   }
   std::vector<std::filesystem::path> paths;
+  std::vector<RejectedImageFile> rejected_here;
   for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
     std::error_code entry_error;
     if (!entry.is_regular_file(entry_error)) continue;
-    if (DetectImageFormat(entry.path()) != ImageFormat::kUnknown) paths.push_back(entry.path());
+    if (DetectImageFormat(entry.path()) != ImageFormat::kUnknown) {
+      paths.push_back(entry.path());
+    } else if (HasImageExtension(entry.path())) {
+      const uintmax_t size = std::filesystem::file_size(entry.path(), entry_error);
+      rejected_here.push_back(
+          {entry.path(), entry_error ? "cannot read the file"
+                         : size == 0 ? "empty file"
+                                     : "not a PNG, JPEG, TIFF or BMP image (by content)"});
+    }
   }
   if (error) throw InputError(dir.string() + ": cannot list: " + error.message());
-  std::sort(paths.begin(), paths.end(), [](const auto& a, const auto& b) {
+  const auto by_name = [](const std::filesystem::path& a, const std::filesystem::path& b) {
     return a.filename().string() < b.filename().string();
-  });
+  };
+  std::sort(paths.begin(), paths.end(), by_name);
+  if (rejected != nullptr) {
+    std::sort(rejected_here.begin(), rejected_here.end(),
+              [&](const auto& a, const auto& b) { return by_name(a.path, b.path); });
+    rejected->insert(rejected->end(), rejected_here.begin(), rejected_here.end());
+  }
   return paths;
 }
 

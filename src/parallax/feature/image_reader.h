@@ -5,6 +5,8 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace parallax {
 
@@ -19,6 +21,10 @@ struct ImageSize {
   int height = 0;
 };
 std::optional<ImageSize> ReadImageSize(const std::filesystem::path& path);
+
+// The same two from bytes in memory (a file's head, or all of it).
+ImageFormat DetectImageFormatFromBytes(std::string_view bytes);
+std::optional<ImageSize> ReadImageSizeFromBytes(std::string_view bytes);
 
 struct ImageReaderOptions {
   // Refuse images with more pixels than this before decoding them.
@@ -37,8 +43,21 @@ struct Bitmap {
 
 // Reads by content. Throws InputError "<path>: <reason>" (not an image, truncated, too large).
 Bitmap ReadBitmap(const std::filesystem::path& path, const ImageReaderOptions& options = {});
+// Decodes a whole image file held in memory; `source` starts every InputError message. The
+// header's size is checked against max_image_pixels before any decoding.
+Bitmap DecodeBitmap(std::string_view bytes, const std::filesystem::path& source,
+                    const ImageReaderOptions& options = {});
 
-// Files of `dir` (not recursive) that look like images by content, sorted by name.
-std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& dir);
+// A file that ListImageFiles left out although its name says it is an image, and why.
+struct RejectedImageFile {
+  std::filesystem::path path;
+  std::string reason;
+};
+
+// Files of `dir` (not recursive) that look like images by content, sorted by name. Files
+// named like images (.jpg, .jpeg, .png, .tif, .tiff, .bmp, any case) that are not images by
+// content (empty, text) are appended to `rejected` when given, so callers can warn about them.
+std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& dir,
+                                                  std::vector<RejectedImageFile>* rejected = nullptr);
 
 }  // namespace parallax

@@ -56,6 +56,16 @@ void FeatureExtractionOptions::Check() const {
   camera.Check();
 }
 
+void CheckCameraSetup(const CameraSetupOptions& options) {
+  options.Check();
+  // The assigner reads and validates K.txt, camera.json and their combination; a scratch
+  // in-memory database keeps nothing.
+  Database scratch(":memory:");
+  const CameraAssigner assigner(options, &scratch);
+  // The number and values of --camera-params do not depend on the image size.
+  if (!options.camera_params.empty()) MakeCamera(options, std::nullopt, 640, 480);
+}
+
 FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
                                        const std::filesystem::path& image_dir, Database* database) {
   options.Check();
@@ -63,8 +73,17 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
   const Timer timer;
   FeatureExtractionStats stats;
 
-  const std::vector<std::filesystem::path> paths = ListImageFiles(image_dir);
+  std::vector<RejectedImageFile> rejected;
+  const std::vector<std::filesystem::path> paths = ListImageFiles(image_dir, &rejected);
   stats.num_images_found = paths.size();
+  // Named like images but not images: the user probably expects them used, so say why not.
+  for (const RejectedImageFile& file : rejected) {
+    const std::string message = file.path.string() + ": " + file.reason;
+    PARALLAX_LOG(Warning) << "skipping " << message;
+    stats.failed.emplace_back(file.path.filename().string(), message);
+  }
+  // A setting no image can satisfy would otherwise skip every image with the same warning.
+  CheckCameraSetup(options.camera);
   CameraAssigner camera_assigner(options.camera, database);
 
   std::vector<ExtractionJob> jobs;
@@ -119,6 +138,12 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
     }
     ++stats.num_extracted;
     total_keypoints += result.keypoints.size();
+    if (result.keypoints.empty()) {
+      // Stored all the same (a resumed run skips it), but it can never be registered.
+      PARALLAX_LOG(Warning) << job.path.string()
+                            << ": no features found (blank or textureless image); it cannot "
+                               "be registered";
+    }
     PARALLAX_LOG(Debug) << job.name << ": " << result.keypoints.size() << " keypoints";
   };
 

@@ -24,7 +24,8 @@ struct FeatureExtractionStats {
   size_t num_images_found = 0;  // Image files in the folder.
   size_t num_extracted = 0;     // Extracted and written in this run.
   size_t num_skipped = 0;       // Already in the database with features (resumed run).
-  // (image name, reason) of files that could not be read or extracted.
+  // (image name, reason) of files that could not be read or extracted, and of files named
+  // like images (.jpg, .png, ...) that are not images by content.
   std::vector<std::pair<std::string, std::string>> failed;
   double mean_num_keypoints = 0;  // Over the images extracted in this run.
   double seconds = 0;
@@ -37,6 +38,11 @@ struct FeatureExtractionStats {
 // skipped. Images are processed in parallel and written in name order, so image ids are
 // deterministic. Throws InputError for a missing folder or intrinsics file, or a database
 // that cannot be written.
+// Refuses camera settings that no image can satisfy (unknown model, unreadable or malformed
+// K.txt or camera.json, conflicting sources, wrong number of --camera-params) with an
+// InputError, before any work.
+void CheckCameraSetup(const CameraSetupOptions& options);
+
 FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
                                        const std::filesystem::path& image_dir, Database* database);
 

@@ -1,5 +1,6 @@
 #include "parallax/pipeline/reconstruction_pipeline.h"
 
+#include "parallax/feature/image_reader.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
@@ -20,6 +21,15 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   if (!std::filesystem::is_directory(image_dir)) {
     throw InputError(image_dir.string() + ": image folder does not exist");
   }
+  // Input that cannot work is refused before anything is created or written.
+  const size_t num_image_files = ListImageFiles(image_dir).size();
+  if (num_image_files == 0) {
+    throw InputError(image_dir.string() + ": no images found (PNG, JPEG, TIFF or BMP by content)");
+  }
+  if (num_image_files == 1) {
+    throw InputError(image_dir.string() + ": only one image; reconstruction needs at least two");
+  }
+  CheckCameraSetup(options.extraction.camera);
   CreateDirectoryOrThrow(output_dir);
   const std::filesystem::path database_path =
       options.database_path.empty() ? output_dir / "database.db" : options.database_path;

@@ -19,6 +19,10 @@ namespace {
 // Rotation matrices in the data sets carry 6 to 20 digits; anything further from
 // orthonormal than this is a broken file, not rounding.
 constexpr double kMaxRotationDeviation = 1e-3;
+// Bounds that keep the conversions of parsed doubles to integers defined (a cast of 1e300 to
+// size_t is undefined behaviour), far above any real data set.
+constexpr double kMaxNumViews = 1e7;
+constexpr double kMaxImageSide = 1e6;
 
 [[noreturn]] void ThrowAt(const std::string& source, size_t line_number, const std::string& reason) {
   throw InputError(source + ":" + std::to_string(line_number) + ": " + reason);
@@ -45,7 +49,8 @@ double ParseFinite(const std::string& token, const std::string& source, size_t l
 Eigen::Matrix3d CheckedRotation(const Eigen::Matrix3d& matrix, const std::string& source,
                                 size_t line_number) {
   const double deviation = (matrix.transpose() * matrix - Eigen::Matrix3d::Identity()).norm();
-  if (deviation > kMaxRotationDeviation || matrix.determinant() <= 0) {
+  // Written so that NaN (from huge entries: inf - inf) fails too.
+  if (!(deviation <= kMaxRotationDeviation) || !(matrix.determinant() > 0)) {
     ThrowAt(source, line_number, "R is not a rotation matrix (|RᵀR - I| = " +
                                      std::to_string(deviation) +
                                      ", det = " + std::to_string(matrix.determinant()) + ")");
@@ -96,6 +101,9 @@ GroundTruth ReadMiddleburyGroundTruth(std::istream& stream, const std::string& s
   const double count_value = ParseFinite(tokens[0], source, line_number);
   if (count_value < 0 || count_value != std::floor(count_value)) {
     ThrowAt(source, line_number, "the number of views must be a non-negative integer");
+  }
+  if (count_value > kMaxNumViews) {
+    ThrowAt(source, line_number, "the number of views " + tokens[0] + " is too large");
   }
   const size_t count = static_cast<size_t>(count_value);
   while (NextTokens(stream, &line_number, &tokens)) {
@@ -165,8 +173,9 @@ GroundTruthImage ReadStrechaCamera(std::istream& stream, const std::string& sour
   }
   const Eigen::Vector3d center(rows[7][0], rows[7][1], rows[7][2]);
   const double width = rows[8][0], height = rows[8][1];
-  if (width < 1 || height < 1 || width != std::floor(width) || height != std::floor(height)) {
-    ThrowAt(source, row_lines[8], "image size must be two positive integers");
+  if (width < 1 || height < 1 || width != std::floor(width) || height != std::floor(height) ||
+      width > kMaxImageSide || height > kMaxImageSide) {
+    ThrowAt(source, row_lines[8], "image size must be two positive integers up to 1000000");
   }
   if (rows[3][0] != 0 || rows[3][1] != 0 || rows[3][2] != 0) {
     PARALLAX_LOG(Warning) << source << ": ignoring non-zero distortion";

@@ -107,6 +107,33 @@ TEST(StrechaGroundTruth, RejectsMalformedFiles) {
                    "bad.camera:5: ", "not a rotation");
 }
 
+// Regressions from fuzzing (issue 8): numbers too large for the integers they become were
+// cast anyway (undefined behaviour: 1e300 views read as 0, a width of 1e300 accepted), and a
+// matrix with huge entries gave NaN checks that passed.
+TEST(MiddleburyGroundTruth, RejectsHugeCountsAndEntries) {
+  std::istringstream huge_count("1e300\na.png 100 0 50 0 110 40 0 0 1 1 0 0 0 1 0 0 0 1 1 2 3\n");
+  ExpectInputError([&] { ReadMiddleburyGroundTruth(huge_count, "par.txt"); }, "par.txt:1: ",
+                   "the number of views 1e300 is too large");
+  std::istringstream huge_rotation(
+      "1\na.png 100 0 50 0 110 40 0 0 1 1e200 1e200 0 1e200 1e200 0 0 0 1 1 2 3\n");
+  ExpectInputError([&] { ReadMiddleburyGroundTruth(huge_rotation, "par.txt"); }, "par.txt:2: ",
+                   "R is not a rotation matrix");
+  std::istringstream mixed_signs(
+      "1\na.png 100 0 50 0 110 40 0 0 1 1e300 -1e300 0 1e300 1e300 0 0 0 1 1 2 3\n");
+  ExpectInputError([&] { ReadMiddleburyGroundTruth(mixed_signs, "par.txt"); }, "par.txt:2: ",
+                   "R is not a rotation matrix");
+}
+
+TEST(StrechaGroundTruth, RejectsHugeImageSizes) {
+  for (const char* size : {"1e300 48", "64 1e19", "2000000 48"}) {
+    std::istringstream stream(std::string("300 0 32\n0 300 24\n0 0 1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                          "0 0 -5\n") +
+                              size + "\n");
+    ExpectInputError([&] { ReadStrechaCamera(stream, "a.camera", "a"); }, "a.camera:9: ",
+                     "image size must be two positive integers up to 1000000");
+  }
+}
+
 TEST(GroundTruth, DetectsFormatAndRejectsUnknownFolders) {
   const auto dir = std::filesystem::temp_directory_path() / "parallax_ground_truth_test";
   std::filesystem::remove_all(dir);
