@@ -1,5 +1,7 @@
 #include "parallax/pipeline/mapping_stage.h"
 
+#include <unistd.h>
+
 #include "parallax/feature/image_reader.h"
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
@@ -34,7 +36,10 @@ void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reco
       const int y = static_cast<int>(point2D.xy.y());
       if (x < 0 || y < 0 || x >= bitmap.color.cols || y >= bitmap.color.rows) continue;
       const cv::Vec3b bgr = bitmap.color.at<cv::Vec3b>(y, x);
-      color_sums[point2D.point3D_id] += Eigen::Vector3d(bgr[2], bgr[1], bgr[0]);
+      // try_emplace with Zero(): operator[] would start the sum from an uninitialised
+      // Eigen vector (random colours, different in every run).
+      color_sums.try_emplace(point2D.point3D_id, Eigen::Vector3d::Zero()).first->second +=
+          Eigen::Vector3d(bgr[2], bgr[1], bgr[0]);
       ++color_counts[point2D.point3D_id];
     }
   }
@@ -46,12 +51,40 @@ void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reco
 
 void WriteModels(const std::vector<Reconstruction>& models, const std::filesystem::path& output_dir,
                  bool write_text, bool write_binary) {
+  namespace fs = std::filesystem;
+  CreateDirectoryOrThrow(output_dir);
+  // Leftovers of a run killed while writing.
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(output_dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("sparse.tmp-", 0) == 0 || name.rfind("sparse.old-", 0) == 0) {
+      fs::remove_all(entry.path(), error);
+    }
+  }
+  // The summary and point cloud of an earlier run go first, so that neither ever describes
+  // models it did not come with (summary.json is written last, once everything is in place).
+  for (const char* name : {"summary.json", "points.ply"}) fs::remove(output_dir / name, error);
+
+  // All models are written beside sparse/ and then renamed into place: a run killed at any
+  // moment leaves the earlier sparse/ or the new one, never a mix, and no model of an earlier
+  // run with more models survives.
+  const std::string suffix = std::to_string(static_cast<long>(getpid()));
+  const fs::path staging = output_dir / ("sparse.tmp-" + suffix);
   for (size_t index = 0; index < models.size(); ++index) {
-    const std::filesystem::path dir = output_dir / "sparse" / std::to_string(index);
+    const fs::path dir = staging / std::to_string(index);
     CreateDirectoryOrThrow(dir);
     if (write_binary) WriteReconstructionBinary(models[index], dir);
     if (write_text) WriteReconstructionText(models[index], dir);
   }
+  const fs::path sparse = output_dir / "sparse";
+  const fs::path previous = output_dir / ("sparse.old-" + suffix);
+  if (fs::exists(sparse, error)) {
+    fs::rename(sparse, previous, error);
+    if (error) throw InputError(sparse.string() + ": cannot replace: " + error.message());
+  }
+  fs::rename(staging, sparse, error);
+  if (error) throw InputError(sparse.string() + ": cannot rename into place: " + error.message());
+  fs::remove_all(previous, error);
   if (!models.empty()) WritePointsPly(models.front(), output_dir / "points.ply");
 }
 

@@ -39,7 +39,9 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
 // Images that cannot be read are skipped with a warning.
 void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reconstruction);
 
-// Writes the models to OUT/sparse/<index>/ and the first one's points to OUT/points.ply.
+// Writes the models to OUT/sparse/<index>/ and the first one's points to OUT/points.ply,
+// replacing the whole sparse/ folder of an earlier run at once (written beside it, then
+// renamed) and removing its summary.json, which the caller writes again last.
 void WriteModels(const std::vector<Reconstruction>& models, const std::filesystem::path& output_dir,
                  bool write_text, bool write_binary);
 
