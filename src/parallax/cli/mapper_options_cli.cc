@@ -31,7 +31,8 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_flag("!--no-refine-intrinsics", mapper.refine_focal_length,
                "Keep focal lengths fixed even for cameras without a prior");
   app.add_option("--ba-threads", mapper.bundle_adjustment.num_threads,
-                 "Threads for bundle adjustment (-1: all)")
+                 "Threads for bundle adjustment (-1: all; 1 makes runs bit-identical, since Ceres' "
+                 "threaded Schur elimination sums in arrival order)")
       ->capture_default_str();
   app.add_flag("!--no-text", options->write_text, "Do not write the .txt model files");
   app.add_flag("!--no-binary", options->write_binary, "Do not write the .bin model files");

@@ -27,7 +27,9 @@ int RunReconstruct(int argc, char** argv) {
   app.add_option("--database", database_path, "Database to use or resume (default OUT/database.db)");
   app.add_option("--threads", num_threads, "Worker threads for every stage (-1: all cores)")
       ->capture_default_str();
-  app.add_option("--seed", seed, "Random seed (same inputs, options and seed: same model)")
+  app.add_option("--seed", seed,
+                 "Random seed (same inputs, options and seed: same model; bit for bit with "
+                 "--ba-threads 1)")
       ->capture_default_str();
   app.add_flag("--report", write_report, "Also write OUT/report.html");
   extraction_flags.Add(app, &options.extraction);
@@ -42,7 +44,10 @@ int RunReconstruct(int argc, char** argv) {
     options.database_path = database_path;
     options.extraction.num_threads = num_threads;
     options.matching.num_threads = num_threads;
-    options.mapping.mapper.bundle_adjustment.num_threads = num_threads;
+    // --ba-threads, when given, overrides --threads for bundle adjustment.
+    if (app.count("--ba-threads") == 0) {
+      options.mapping.mapper.bundle_adjustment.num_threads = num_threads;
+    }
     const ReconstructionPipelineResult result =
         RunReconstructionPipeline(options, image_dir, output_dir);
     PrintMappingResult(result.mapping, output_dir);

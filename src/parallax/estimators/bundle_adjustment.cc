@@ -5,7 +5,8 @@
 #include <algorithm>
 #include <map>
 #include <memory>
-#include <unordered_set>
+#include <set>
+#include <unordered_map>
 #include <vector>
 
 #include "parallax/estimators/cost_functions/reprojection_error.h"
@@ -57,6 +58,41 @@ void ChooseLinearSolver(size_t num_images, ceres::Solver::Options* solver_option
   solver_options->preconditioner_type = ceres::SCHUR_JACOBI;
 }
 
+// Parameter blocks copied into one buffer, in the order they were added; Solve works on the
+// copies and CopyBack writes them to the model.
+class ParameterArena {
+ public:
+  void Add(double* block, int size) {
+    if (offsets_.count(block) > 0) return;
+    offsets_.emplace(block, values_.size());
+    blocks_.push_back({block, size});
+    values_.resize(values_.size() + static_cast<size_t>(size));
+  }
+  // Copies the model's values in; no Add after this (the buffer must not move).
+  void Allocate() {
+    for (const Block& block : blocks_) {
+      std::copy(block.original, block.original + block.size,
+                values_.data() + offsets_[block.original]);
+    }
+  }
+  double* operator()(double* original) { return values_.data() + offsets_.at(original); }
+  void CopyBack() const {
+    for (const Block& block : blocks_) {
+      const double* copy = values_.data() + offsets_.at(block.original);
+      std::copy(copy, copy + block.size, block.original);
+    }
+  }
+
+ private:
+  struct Block {
+    double* original;
+    int size;
+  };
+  std::vector<Block> blocks_;
+  std::unordered_map<const double*, size_t> offsets_;
+  std::vector<double> values_;
+};
+
 // Indices of the camera parameters that stay fixed under the refine flags.
 std::vector<int> FixedCameraParamIdxs(const BundleAdjustmentOptions& options,
                                       CameraModelId model_id) {
@@ -97,6 +133,56 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
     return summary;
   }
 
+  // 1. What takes part: the config's images, the points they observe, and those points'
+  // other registered views (constant poses, as COLMAP does). Ordered sets throughout.
+  std::set<camera_t> variable_camera_ids;
+  std::vector<point3D_t> point3D_ids;
+  for (const image_t image_id : config.images) {
+    const Image& image = reconstruction->GetImage(image_id);
+    variable_camera_ids.insert(image.camera_id);
+    for (const Point2D& point2D : image.points2D) {
+      if (point2D.HasPoint3D()) point3D_ids.push_back(point2D.point3D_id);
+    }
+  }
+  std::sort(point3D_ids.begin(), point3D_ids.end());
+  point3D_ids.erase(std::unique(point3D_ids.begin(), point3D_ids.end()), point3D_ids.end());
+  std::set<image_t> outside_image_ids;
+  std::set<camera_t> outside_camera_ids;
+  for (const point3D_t point3D_id : point3D_ids) {
+    for (const TrackElement& element : reconstruction->GetPoint3D(point3D_id).track.elements) {
+      if (config.images.count(element.image_id) > 0) continue;
+      const Image& image = reconstruction->GetImage(element.image_id);
+      if (!image.registered) continue;
+      outside_image_ids.insert(element.image_id);
+      if (variable_camera_ids.count(image.camera_id) == 0) {
+        outside_camera_ids.insert(image.camera_id);
+      }
+    }
+  }
+
+  // 2. Ceres orders the blocks of an elimination group by address, which sets the order of
+  // the Schur complement's sums: blocks copied into one buffer in id order make the solution
+  // independent of where the heap put the model (bit-identical runs with one thread).
+  ParameterArena arena;
+  for (const point3D_t point3D_id : point3D_ids) {
+    arena.Add(reconstruction->GetPoint3D(point3D_id).xyz.data(), 3);
+  }
+  for (const std::set<image_t>* image_ids :
+       {&config.images, static_cast<const std::set<image_t>*>(&outside_image_ids)}) {
+    for (const image_t image_id : *image_ids) {
+      Rigid3d& cam_from_world = reconstruction->GetImage(image_id).cam_from_world;
+      arena.Add(cam_from_world.rotation.coeffs().data(), 4);
+      arena.Add(cam_from_world.translation.data(), 3);
+    }
+  }
+  for (const auto* camera_ids : {&variable_camera_ids, &outside_camera_ids}) {
+    for (const camera_t camera_id : *camera_ids) {
+      std::vector<double>& params = reconstruction->GetCamera(camera_id).params;
+      arena.Add(params.data(), static_cast<int>(params.size()));
+    }
+  }
+  arena.Allocate();
+
   // The problem borrows the loss and manifolds: one object each, shared by all blocks.
   const std::unique_ptr<ceres::LossFunction> loss_function =
       CreateLossFunction(options.loss_function, options.loss_scale_px);
@@ -106,51 +192,33 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-
-  // 1. Every observation in the config's images.
-  std::unordered_set<camera_t> variable_camera_ids;
-  std::vector<point3D_t> point3D_ids;
-  for (const image_t image_id : config.images) {
-    Image& image = reconstruction->GetImage(image_id);
+  const auto add_observation = [&](const Image& image, const Eigen::Vector2d& xy,
+                                   Point3D& point3D) {
     Camera& camera = reconstruction->GetCamera(image.camera_id);
-    variable_camera_ids.insert(image.camera_id);
-    double* rotation = image.cam_from_world.rotation.coeffs().data();
-    double* translation = image.cam_from_world.translation.data();
+    Rigid3d& cam_from_world = reconstruction->GetImage(image.image_id).cam_from_world;
+    problem.AddResidualBlock(CreateReprojectionErrorCostFunction(camera.model_id, xy),
+                             loss_function.get(), arena(cam_from_world.rotation.coeffs().data()),
+                             arena(cam_from_world.translation.data()), arena(point3D.xyz.data()),
+                             arena(camera.params.data()));
+  };
+
+  // 3. Every observation in the config's images, then the rest of those points' tracks.
+  for (const image_t image_id : config.images) {
+    const Image& image = reconstruction->GetImage(image_id);
     for (const Point2D& point2D : image.points2D) {
       if (!point2D.HasPoint3D()) continue;
-      Point3D& point3D = reconstruction->GetPoint3D(point2D.point3D_id);
-      problem.AddResidualBlock(CreateReprojectionErrorCostFunction(camera.model_id, point2D.xy),
-                               loss_function.get(), rotation, translation, point3D.xyz.data(),
-                               camera.params.data());
-      point3D_ids.push_back(point2D.point3D_id);
+      add_observation(image, point2D.xy, reconstruction->GetPoint3D(point2D.point3D_id));
     }
   }
-  std::sort(point3D_ids.begin(), point3D_ids.end());
-  point3D_ids.erase(std::unique(point3D_ids.begin(), point3D_ids.end()), point3D_ids.end());
-
-  // 2. The rest of those points' tracks, seen from registered images outside the config whose
-  // poses (and cameras, unless a config image shares them) stay constant, as COLMAP does.
-  std::unordered_set<image_t> outside_image_ids;
-  std::unordered_set<camera_t> outside_camera_ids;
   for (const point3D_t point3D_id : point3D_ids) {
     Point3D& point3D = reconstruction->GetPoint3D(point3D_id);
     for (const TrackElement& element : point3D.track.elements) {
-      if (config.images.count(element.image_id) > 0) continue;
-      Image& image = reconstruction->GetImage(element.image_id);
-      if (!image.registered) continue;
-      Camera& camera = reconstruction->GetCamera(image.camera_id);
-      outside_image_ids.insert(element.image_id);
-      if (variable_camera_ids.count(image.camera_id) == 0) {
-        outside_camera_ids.insert(image.camera_id);
-      }
-      problem.AddResidualBlock(CreateReprojectionErrorCostFunction(
-                                   camera.model_id, image.points2D[element.point2D_idx].xy),
-                               loss_function.get(), image.cam_from_world.rotation.coeffs().data(),
-                               image.cam_from_world.translation.data(), point3D.xyz.data(),
-                               camera.params.data());
+      if (outside_image_ids.count(element.image_id) == 0) continue;
+      const Image& image = reconstruction->GetImage(element.image_id);
+      add_observation(image, image.points2D[element.point2D_idx].xy, point3D);
     }
     if (config.constant_points.count(point3D_id) > 0) {
-      problem.SetParameterBlockConstant(point3D.xyz.data());
+      problem.SetParameterBlockConstant(arena(point3D.xyz.data()));
     }
   }
 
@@ -169,8 +237,8 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
   }
   for (const image_t image_id : config.images) {
     Image& image = reconstruction->GetImage(image_id);
-    double* rotation = image.cam_from_world.rotation.coeffs().data();
-    double* translation = image.cam_from_world.translation.data();
+    double* rotation = arena(image.cam_from_world.rotation.coeffs().data());
+    double* translation = arena(image.cam_from_world.translation.data());
     if (!problem.HasParameterBlock(rotation)) continue;  // An image without observations.
     if (config.constant_poses.count(image_id) > 0) {
       problem.SetParameterBlockConstant(rotation);
@@ -189,14 +257,14 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
   }
   for (const image_t image_id : outside_image_ids) {
     Image& image = reconstruction->GetImage(image_id);
-    problem.SetParameterBlockConstant(image.cam_from_world.rotation.coeffs().data());
-    problem.SetParameterBlockConstant(image.cam_from_world.translation.data());
+    problem.SetParameterBlockConstant(arena(image.cam_from_world.rotation.coeffs().data()));
+    problem.SetParameterBlockConstant(arena(image.cam_from_world.translation.data()));
   }
 
   // 4. Intrinsics: constant unless refined; a subset manifold holds the unrefined ones.
   for (const camera_t camera_id : variable_camera_ids) {
     Camera& camera = reconstruction->GetCamera(camera_id);
-    double* params = camera.params.data();
+    double* params = arena(camera.params.data());
     if (!problem.HasParameterBlock(params)) continue;
     const std::vector<int> fixed = FixedCameraParamIdxs(options, camera.model_id);
     if (config.constant_cameras.count(camera_id) > 0 || fixed.size() == camera.params.size()) {
@@ -208,27 +276,27 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
     }
   }
   for (const camera_t camera_id : outside_camera_ids) {
-    problem.SetParameterBlockConstant(reconstruction->GetCamera(camera_id).params.data());
+    problem.SetParameterBlockConstant(arena(reconstruction->GetCamera(camera_id).params.data()));
   }
 
   // 5. Schur ordering: points are eliminated first, poses and intrinsics form the reduced
   // camera system. Cheaper and more predictable than Ceres' automatic independent set.
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   for (const point3D_t point3D_id : point3D_ids) {
-    ordering->AddElementToGroup(reconstruction->GetPoint3D(point3D_id).xyz.data(), 0);
+    ordering->AddElementToGroup(arena(reconstruction->GetPoint3D(point3D_id).xyz.data()), 0);
   }
   auto add_image_blocks = [&](image_t image_id) {
     Image& image = reconstruction->GetImage(image_id);
-    double* rotation = image.cam_from_world.rotation.coeffs().data();
+    double* rotation = arena(image.cam_from_world.rotation.coeffs().data());
     if (!problem.HasParameterBlock(rotation)) return;
     ordering->AddElementToGroup(rotation, 1);
-    ordering->AddElementToGroup(image.cam_from_world.translation.data(), 1);
+    ordering->AddElementToGroup(arena(image.cam_from_world.translation.data()), 1);
   };
   for (const image_t image_id : config.images) add_image_blocks(image_id);
   for (const image_t image_id : outside_image_ids) add_image_blocks(image_id);
   for (const auto* camera_ids : {&variable_camera_ids, &outside_camera_ids}) {
     for (const camera_t camera_id : *camera_ids) {
-      double* params = reconstruction->GetCamera(camera_id).params.data();
+      double* params = arena(reconstruction->GetCamera(camera_id).params.data());
       if (problem.HasParameterBlock(params)) ordering->AddElementToGroup(params, 1);
     }
   }
@@ -242,12 +310,15 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
   solver_options.function_tolerance = options.function_tolerance;
   solver_options.gradient_tolerance = options.gradient_tolerance;
   solver_options.parameter_tolerance = options.parameter_tolerance;
-  solver_options.num_threads = EffectiveNumThreads(options.num_threads);
+  // Ceres warns on stderr (through glog) when asked for more threads than cores.
+  solver_options.num_threads =
+      std::min(EffectiveNumThreads(options.num_threads), EffectiveNumThreads(-1));
   solver_options.logging_type = ceres::SILENT;
   solver_options.minimizer_progress_to_stdout = false;
 
   ceres::Solver::Summary ceres_summary;
   ceres::Solve(solver_options, &problem, &ceres_summary);
+  arena.CopyBack();
 
   // The manifold keeps quaternions on the unit sphere only up to round-off.
   for (const image_t image_id : config.images) {
