@@ -16,6 +16,11 @@ packages=(
 if [[ "${PARALLAX_EXTRA_DEPS:-0}" == "1" ]]; then
   packages+=(clang-14 libclang-rt-14-dev)
 fi
+# Packages of the end-to-end benchmark (bench/run.sh), installed when asked:
+# PARALLAX_BENCH_DEPS=1. GNU time measures wall time and peak memory; COLMAP is the reference.
+if [[ "${PARALLAX_BENCH_DEPS:-0}" == "1" ]]; then
+  packages+=(time colmap python3)
+fi
 
 missing=()
 for package in "${packages[@]}"; do

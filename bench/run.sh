@@ -1,0 +1,126 @@
+#!/usr/bin/env bash
+# End-to-end benchmark: Parallax against COLMAP on the same images with the same known
+# intrinsics, side by side.
+#
+#   bench/run.sh [DATASET...]        # default: templeRing fountain-P11
+#   bench/run.sh templeRing          # one data set (COLMAP on fountain-P11 takes many minutes)
+#
+# For each data set (a folder of $PARALLAX_DATA with images/ and ground truth):
+#   1. parallax reconstruct --intrinsics K (features, matching + verification, mapping);
+#   2. when `colmap` is on the PATH (Debian package colmap, 3.8): feature_extractor (PINHOLE,
+#      one camera, the same K, CPU SIFT), exhaustive_matcher (CPU), mapper (intrinsics fixed);
+#   3. the mapping stage alone on COLMAP's database, i.e. on the same matches:
+#      parallax mapper --database DB against the colmap mapper of step 2;
+#   4. parallax evaluate of every model against the ground truth.
+# Every command runs under /usr/bin/time -v (wall time, peak resident memory). The results go
+# to stdout as a markdown table and to $BENCH_OUT/results.json.
+#
+# Environment:
+#   PARALLAX_DATA     data sets (default: ../shared/data beside the checkout)
+#   PARALLAX_BINARY   the parallax executable (default: build/parallax, then build-*/parallax)
+#   BENCH_OUT         output folder (default: /tmp/parallax-bench-YYYYmmdd-HHMMSS)
+#   BENCH_THREADS     threads for both tools (default: all cores)
+#   BENCH_NO_COLMAP=1 skip COLMAP even when installed
+# Needs bash, python3 and GNU time (/usr/bin/time; PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh
+# installs it and COLMAP).
+set -euo pipefail
+
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+data="${PARALLAX_DATA:-$repo/../shared/data}"
+threads="${BENCH_THREADS:-$(nproc)}"
+out="${BENCH_OUT:-/tmp/parallax-bench-$(date +%Y%m%d-%H%M%S)}"
+datasets=("$@")
+[[ ${#datasets[@]} -eq 0 ]] && datasets=(templeRing fountain-P11)
+
+binary="${PARALLAX_BINARY:-}"
+if [[ -z "$binary" ]]; then
+  for candidate in "$repo"/build/parallax "$repo"/build-*/parallax; do
+    if [[ -x "$candidate" ]]; then binary="$candidate"; break; fi
+  done
+fi
+[[ -x "$binary" ]] || { echo "run.sh: no parallax binary (set PARALLAX_BINARY)" >&2; exit 1; }
+[[ -x /usr/bin/time ]] || {
+  echo "run.sh: /usr/bin/time missing: PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh" >&2; exit 1; }
+use_colmap=0
+if [[ "${BENCH_NO_COLMAP:-0}" != "1" ]] && command -v colmap >/dev/null; then use_colmap=1; fi
+
+mkdir -p "$out"
+echo "run.sh: parallax $binary, colmap $([[ $use_colmap == 1 ]] && command -v colmap || echo none)," \
+  "$threads threads, results in $out" >&2
+
+# timed NAME CMD...: runs CMD with /usr/bin/time -v, log in $run/NAME.log, measures in NAME.time.
+timed() {
+  local name="$1"; shift
+  echo "run.sh: [$name] $*" >&2
+  if ! /usr/bin/time -v -o "$run/$name.time" "$@" >"$run/$name.log" 2>&1; then
+    echo "run.sh: [$name] failed, see $run/$name.log" >&2
+    return 1
+  fi
+}
+
+for dataset in "${datasets[@]}"; do
+  dir="$data/$dataset"
+  [[ -d "$dir/images" ]] || { echo "run.sh: $dir/images not found" >&2; exit 1; }
+  run="$out/$dataset"
+  rm -rf "$run"
+  mkdir -p "$run"
+
+  # Known intrinsics: K.txt, or the first K of a Middlebury *_par.txt.
+  if [[ -f "$dir/K.txt" ]]; then
+    tr -d '\r' <"$dir/K.txt" >"$run/K.txt"
+  else
+    par="$(ls "$dir"/*_par.txt | head -1)"
+    tr -d '\r' <"$par" | awk 'NF == 22 { printf "%s %s %s\n%s %s %s\n%s %s %s\n", $2, $3, $4, $5, $6, $7, $8, $9, $10; exit }' >"$run/K.txt"
+  fi
+  read -r fx _ cx <<<"$(sed -n 1p "$run/K.txt")"
+  read -r _ fy cy <<<"$(sed -n 2p "$run/K.txt")"
+  # Ground truth: a Middlebury *_par.txt, or a folder of Strecha .camera files.
+  gt="$(ls "$dir"/*_par.txt 2>/dev/null | head -1 || true)"
+  [[ -z "$gt" && -d "$dir/gt" ]] && gt="$dir/gt"
+
+  # 1. Parallax end to end.
+  timed parallax "$binary" reconstruct --images "$dir/images" --output "$run/parallax" \
+    --intrinsics "$run/K.txt" --threads "$threads" || true
+
+  if [[ $use_colmap == 1 ]]; then
+    # 2. COLMAP with the same intrinsics, CPU only.
+    db="$run/colmap/database.db"
+    mkdir -p "$run/colmap/sparse"
+    timed colmap_features colmap feature_extractor --database_path "$db" \
+      --image_path "$dir/images" --ImageReader.camera_model PINHOLE \
+      --ImageReader.single_camera 1 --ImageReader.camera_params "$fx,$fy,$cx,$cy" \
+      --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads "$threads" || true
+    timed colmap_matching colmap exhaustive_matcher --database_path "$db" \
+      --SiftMatching.use_gpu 0 --SiftMatching.num_threads "$threads" || true
+    timed colmap_mapping colmap mapper --database_path "$db" --image_path "$dir/images" \
+      --output_path "$run/colmap/sparse" --Mapper.num_threads "$threads" \
+      --Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_principal_point 0 \
+      --Mapper.ba_refine_extra_params 0 || true
+    # 3. Parallax's mapper on COLMAP's database (a copy: the mapper only reads it).
+    cp "$db" "$run/colmap_db_copy.db"
+    timed parallax_mapper "$binary" mapper --database "$run/colmap_db_copy.db" \
+      --image-path "$dir/images" --output "$run/parallax_mapper" --ba-threads "$threads" || true
+  fi
+
+  # 4. Accuracy of every model against the ground truth (the largest model of each run).
+  if [[ -n "$gt" ]]; then
+    for model_root in parallax/sparse parallax_mapper/sparse colmap/sparse; do
+      [[ -d "$run/$model_root" ]] || continue
+      name="${model_root%%/*}"
+      best=""; best_images=-1
+      for model in "$run/$model_root"/*/; do
+        [[ -f "$model/images.bin" || -f "$model/images.txt" ]] || continue
+        if "$binary" evaluate "${model%/}" --gt "$gt" --json >"$run/eval_tmp.json" 2>/dev/null; then
+          images="$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["images_registered"])' "$run/eval_tmp.json")"
+          if (( images > best_images )); then
+            best_images=$images; best="${model%/}"; mv "$run/eval_tmp.json" "$run/eval_$name.json"
+          fi
+        fi
+      done
+      rm -f "$run/eval_tmp.json"
+      [[ -n "$best" ]] && echo "$best" >"$run/eval_$name.model"
+    done
+  fi
+done
+
+python3 "$repo/bench/summarize.py" "$out" "${datasets[@]}"
