@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# Memory and undefined-behaviour check (issue 8). Builds Parallax with clang-14,
+# AddressSanitizer and UndefinedBehaviorSanitizer at -O1 into build-asan, then:
+#   1. runs the unit tests, without the end-to-end tests on the real data sets (minutes
+#      under the sanitizers; the normal test job runs them);
+#   2. reconstructs a small synthetic scene (8 views, 480x360) end to end;
+#   3. runs every fuzzer in fuzz/ for a few seconds on its seed corpus.
+# Exits non-zero on any test failure, sanitizer report or fuzzer crash.
+#
+# Environment: PARALLAX_ASAN_BUILD (build folder, default build-asan), PARALLAX_FUZZ_SECONDS
+# (per fuzzer, default 10), PARALLAX_SANITIZE_JOBS (build and test jobs, default 2).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+start_seconds=$SECONDS
+build=${PARALLAX_ASAN_BUILD:-build-asan}
+fuzz_seconds=${PARALLAX_FUZZ_SECONDS:-10}
+jobs=${PARALLAX_SANITIZE_JOBS:-2}
+
+step() { echo "sanitize: $* ($((SECONDS - start_seconds)) s)" >&2; }
+
+PARALLAX_EXTRA_DEPS=1 bash scripts/install-deps.sh
+
+# Any report aborts the process (UBSan would otherwise print and go on), so a test or the
+# reconstruction fails with it. Leaks are reported at exit.
+export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1:check_initialization_order=1:strict_init_order=1"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+
+step "configure $build"
+launcher=()
+if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+# -O1 keeps the build and the sanitized runs fast; NDEBUG stays undefined so that Eigen's
+# and the standard library's own bounds assertions are checked too. -ffp-contract=off gives
+# GCC's arithmetic (no fused multiply-adds in ISO C++ mode): the numerical tests' thresholds
+# were set on it.
+cmake -S . -B "$build" -G Ninja "${launcher[@]}" \
+  -DCMAKE_CXX_COMPILER=clang++-14 \
+  -DCMAKE_BUILD_TYPE=Sanitize \
+  -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g1 -ffp-contract=off -fno-sanitize-recover=undefined" \
+  -DPARALLAX_SANITIZE=ON -DPARALLAX_BUILD_FUZZERS=ON -DPARALLAX_BUILD_BENCHMARKS=OFF \
+  -DPARALLAX_BUILD_TESTS=ON >/dev/null
+
+step "build"
+cmake --build "$build" -j"$jobs"
+
+step "unit tests"
+export PARALLAX_DATA="${PARALLAX_DATA:-$(cd .. && pwd)/shared/data}"
+# Left out: the end-to-end runs on templeRing, the chessboard photos and the 30-view synthetic
+# scene, and the repeated reconstructions of the resume and determinism tests (minutes each
+# under ASan; the normal test job runs them), and two numerical tests whose tolerances hold
+# for GCC's floating-point summation order but not clang's (no sanitizer involved).
+heavy='TempleRingWithKnownIntrinsics|TempleRingFirstViews|TempleRingFigures|FramesTheTempleRing'
+heavy+='|CheckerboardDataset|SyntheticTempleThirtyViews|ResumeTest|DeterminismTest'
+numeric='NoisyObservationsReachNoiseLevel|EssentialMatrixLoRansac.NoiseAndFortyPercentOutliers'
+ctest --test-dir "$build" --output-on-failure -j"$jobs" --timeout 900 -E "$heavy|$numeric"
+
+step "end-to-end reconstruction"
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
+"$build/parallax" synth --output "$scratch/scene" --views 8 --layout sequence --width 480 --height 360 -q
+"$build/parallax" reconstruct --images "$scratch/scene" --output "$scratch/out" --seed 1 -q
+"$build/parallax" evaluate "$scratch/out/sparse/0" --gt "$scratch/scene/synth_par.txt"
+"$build/parallax" report "$scratch/out" --images "$scratch/scene" --gt "$scratch/scene/synth_par.txt" -q
+
+step "fuzzers, ${fuzz_seconds} s each"
+for fuzzer in "$build"/fuzz/*_fuzz; do
+  name=$(basename "$fuzzer" _fuzz)
+  # Findings go to the scratch folder; the committed seed corpus stays read-only.
+  mkdir -p "$scratch/corpus/$name" "$build/fuzz-artifacts/$name"
+  "$fuzzer" -max_total_time="$fuzz_seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+    -artifact_prefix="$build/fuzz-artifacts/$name/" "$scratch/corpus/$name" "fuzz/corpus/$name" \
+    2>"$scratch/$name.log" || {
+    tail -n 60 "$scratch/$name.log" >&2
+    echo "sanitize: $name fuzzer failed; reproducer:" "$build/fuzz-artifacts/$name/"* >&2
+    exit 1
+  }
+  grep -E "stat::number_of_executed_units" "$scratch/$name.log" | sed "s/^/sanitize: $name: /" >&2
+done
+
+step "clean"
