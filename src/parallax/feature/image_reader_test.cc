@@ -278,6 +278,72 @@ TEST_F(ImageReaderTest, ListImageFilesByContent) {
   for (const fs::path& file : files) names.push_back(file.filename().string());
   EXPECT_EQ(names, (std::vector<std::string>{"a.jpg", "b.png", "c.bmp", "d.tif"}));
   EXPECT_THROW(ListImageFiles(dir_ / "missing"), InputError);
+
+  // Files named like images that are not, for the caller to warn about; notes.txt is not one.
+  WriteBytes("G.JPEG", "also text");
+  std::vector<RejectedImageFile> rejected;
+  EXPECT_EQ(ListImageFiles(dir_, &rejected).size(), 4u);
+  ASSERT_EQ(rejected.size(), 3u);
+  EXPECT_EQ(rejected[0].path, dir_ / "G.JPEG");
+  EXPECT_EQ(rejected[0].reason, "not a PNG, JPEG, TIFF or BMP image (by content)");
+  EXPECT_EQ(rejected[1].path, dir_ / "e.jpg");
+  EXPECT_EQ(rejected[2].path, dir_ / "f.png");
+  EXPECT_EQ(rejected[2].reason, "empty file");
+}
+
+TEST_F(ImageReaderTest, DecodesFromMemoryWithTheSameChecks) {
+  const cv::Mat image = TestImage(40, 30);
+  std::vector<uint8_t> png;
+  ASSERT_TRUE(cv::imencode(".png", image, png));
+  const std::string bytes(png.begin(), png.end());
+  EXPECT_EQ(DetectImageFormatFromBytes(bytes), ImageFormat::kPng);
+  const std::optional<ImageSize> size = ReadImageSizeFromBytes(bytes);
+  ASSERT_TRUE(size.has_value());
+  EXPECT_EQ(size->width, 40);
+  EXPECT_EQ(size->height, 30);
+  EXPECT_TRUE(Equal(DecodeBitmap(bytes, "memory.png").color, image));
+  EXPECT_EQ(DetectImageFormatFromBytes("GIF89a"), ImageFormat::kUnknown);
+  EXPECT_FALSE(ReadImageSizeFromBytes(bytes.substr(0, 20)).has_value());
+
+  const auto expect_error = [](const std::string& data, const std::string& reason,
+                               const ImageReaderOptions& options) {
+    try {
+      DecodeBitmap(data, "memory.png", options);
+      ADD_FAILURE() << "no exception for " << reason;
+    } catch (const InputError& error) {
+      const std::string message = error.what();
+      EXPECT_EQ(message.rfind("memory.png: ", 0), 0u) << message;
+      EXPECT_NE(message.find(reason), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  };
+  expect_error("", "empty file", {});
+  expect_error(bytes.substr(0, bytes.size() - 20), "truncated PNG", {});
+  expect_error("hello", "not a PNG, JPEG, TIFF or BMP image", {});
+  ImageReaderOptions small;
+  small.max_image_pixels = 1000;
+  expect_error(bytes, "40x30 pixels, more than max_image_pixels = 1000", small);
+}
+
+TEST_F(ImageReaderTest, LargeJpegHeaderBeyondTheFirstMegabyteIsStillFound) {
+  // ReadBitmap checks the header from the file's first MiB before reading the rest; a frame
+  // header behind 1.2 MB of application segments is then checked on the whole file.
+  const cv::Mat image = TestImage(32, 24);
+  std::vector<uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", image, jpeg));
+  std::string bytes(jpeg.begin(), jpeg.end());
+  std::string segments;
+  for (int k = 0; k < 20; ++k) {
+    segments += std::string("\xff\xe9\xff\xff", 4) + std::string(65533, static_cast<char>(k));
+  }
+  bytes.insert(2, segments);
+  const fs::path path = WriteBytes("padded.jpg", bytes);
+  const Bitmap bitmap = ReadBitmap(path);
+  EXPECT_EQ(bitmap.Width(), 32);
+  EXPECT_EQ(bitmap.Height(), 24);
+  ImageReaderOptions small;
+  small.max_image_pixels = 100;
+  ExpectInputError(path, "32x24 pixels, more than max_image_pixels = 100", small);
 }
 
 }  // namespace

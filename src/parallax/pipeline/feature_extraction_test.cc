@@ -132,6 +132,44 @@ TEST_F(FeatureExtractionTest, IntrinsicsAndSingleCamera) {
   EXPECT_LE(database.NumKeypoints(1), 100u);
 }
 
+TEST_F(FeatureExtractionTest, WarnsAboutFilesNamedLikeImagesAndBlankImages) {
+  WriteImage("a.png", 160, 120);
+  std::ofstream(images_ / "empty.jpg", std::ios::binary);
+  std::ofstream(images_ / "text.png") << "not an image\n";
+  std::ofstream(images_ / "notes.txt") << "not named like one\n";
+  ASSERT_TRUE(cv::imwrite((images_ / "blank.png").string(),
+                          cv::Mat(120, 160, CV_8UC3, cv::Scalar::all(90))));
+  FeatureExtractionOptions options;
+  Database database(dir_ / "database.db");
+  const FeatureExtractionStats stats = ExtractFeatures(options, images_, &database);
+  EXPECT_EQ(stats.num_images_found, 2u);
+  EXPECT_EQ(stats.num_extracted, 2u);  // The blank image is stored, with no keypoints.
+  ASSERT_EQ(stats.failed.size(), 2u);
+  EXPECT_EQ(stats.failed[0].first, "empty.jpg");
+  EXPECT_EQ(stats.failed[0].second, (images_ / "empty.jpg").string() + ": empty file");
+  EXPECT_EQ(stats.failed[1].first, "text.png");
+  EXPECT_EQ(database.NumKeypoints(*database.ImageIdByName("blank.png")), 0u);
+}
+
+TEST_F(FeatureExtractionTest, CameraSettingsNoImageCanSatisfyFailBeforeAnyWork) {
+  WriteImage("a.png", 64, 48);
+  FeatureExtractionOptions options;
+  options.camera.camera_model = "PINHOLE";
+  options.camera.camera_params = {100, 100, 32};
+  EXPECT_THROW(CheckCameraSetup(options.camera), InputError);
+  Database database(dir_ / "database.db");
+  EXPECT_THROW(ExtractFeatures(options, images_, &database), InputError);
+  EXPECT_EQ(database.NumImages(), 0u);
+  options.camera.camera_params = {100, 100, 32, 24};
+  EXPECT_NO_THROW(CheckCameraSetup(options.camera));
+  options.camera.camera_model = "NO_SUCH_MODEL";
+  EXPECT_THROW(CheckCameraSetup(options.camera), InputError);
+  options.camera = CameraSetupOptions();
+  std::ofstream(dir_ / "K.txt") << "1 2 3\n";
+  options.camera.intrinsics_path = dir_ / "K.txt";
+  EXPECT_THROW(CheckCameraSetup(options.camera), InputError);
+}
+
 TEST_F(FeatureExtractionTest, MissingInputsThrow) {
   FeatureExtractionOptions options;
   Database database(dir_ / "database.db");
