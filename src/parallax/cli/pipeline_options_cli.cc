@@ -41,8 +41,8 @@ void ExtractionFlags::Add(CLI::App& app, FeatureExtractionOptions* options) {
                  "Refuse images with more pixels than this, before decoding")
       ->capture_default_str();
   app.add_option("--sift-contrast", options->sift.contrast_threshold,
-                 "SIFT contrast threshold, OpenCV convention (the paper's 0.04; COLMAP's default "
-                 "peak threshold equals 0.02)")
+                 "SIFT contrast threshold, OpenCV convention (0.03: 24 % more keypoints than the "
+                 "paper's 0.04; COLMAP's default peak threshold equals 0.02)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--sift-edge", options->sift.edge_threshold, "SIFT edge threshold")

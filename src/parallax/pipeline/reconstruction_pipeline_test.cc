@@ -61,7 +61,7 @@ TEST(ReconstructionPipeline, TempleRingWithKnownIntrinsics) {
   EXPECT_LE(metrics.center_error.median, 0.0013);  // Metres.
   EXPECT_LE(metrics.rotation_error_deg.median, 0.2);
   EXPECT_LE(metrics.mean_reprojection_error_px, 0.5);
-  EXPECT_GE(model.NumPoints3D(), 6000u);
+  EXPECT_GE(model.NumPoints3D(), 7500u);  // COLMAP 3.8: 7,649 on the same images.
   std::filesystem::remove_all(dir);
 }
 
