@@ -65,5 +65,28 @@ TEST(ReconstructionPipeline, TempleRingWithKnownIntrinsics) {
   std::filesystem::remove_all(dir);
 }
 
+// templeRing with no intrinsics at all (issue 5): the focal length starts from the prior of
+// 1.2 x 640 px = 768 px and bundle adjustment must find the true 1520 px.
+TEST(ReconstructionPipeline, TempleRingWithoutIntrinsics) {
+  const auto data = DataRoot() / "templeRing";
+  if (!std::filesystem::exists(data / "templeR_par.txt")) GTEST_SKIP() << "no " << data;
+  const auto dir = TempDir("pipeline_temple_uncalibrated");
+  const GroundTruth truth = ReadGroundTruth(data / "templeR_par.txt");
+  const ReconstructionPipelineResult result =
+      RunReconstructionPipeline(ReconstructionPipelineOptions(), data / "images", dir / "out");
+  ASSERT_TRUE(result.Success());
+  const Reconstruction& model = result.mapping.models.front();
+  const EvaluationMetrics metrics = EvaluateReconstruction(model, truth);
+  std::cout << MetricsToText(metrics) << std::endl;
+  EXPECT_GE(model.NumRegImages(), 45u);
+  EXPECT_LE(metrics.center_error.median, 2 * 0.0013);  // Twice the calibrated run's bar.
+  ASSERT_EQ(model.Cameras().size(), 1u);
+  const Camera& camera = model.Cameras().begin()->second;
+  const double focal = camera.params[0];
+  std::cout << "recovered focal length " << focal << " px (ground truth 1520.4)\n";
+  EXPECT_NEAR(focal, 1520.4, 0.02 * 1520.4);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace parallax
