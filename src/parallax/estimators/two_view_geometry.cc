@@ -25,8 +25,6 @@ constexpr double kWatermarkBorderSize = 0.1;
 // A planar pair whose baseline is below this fraction of the plane's distance is a pure
 // rotation for reconstruction purposes (rays from both centres meet at < ~0.3 degrees).
 constexpr double kMaxPanoramicBaselineRatio = 0.005;
-// Triangulated points farther than this many baselines do not vote for a homography pose.
-constexpr double kMaxDepthInBaselines = 1000.0;
 
 // A pure 2D translation x2 = x1 + t: the model of a watermark or time stamp that sits at the
 // same place in both images.
@@ -294,40 +292,20 @@ bool PoseFromCalibratedHomography(const Eigen::Matrix3d& H_calibrated,
     return cam2_from_cam1->rotation.coeffs().allFinite();
   }
 
-  // As in PoseFromEssentialMatrix: with (R, -T) the triangulated point is -X, so one
-  // triangulation per solution scores both signs. Candidate 2 c + s is (R_c, s == 0 ? T_c : -T_c).
-  const Matrix3x4d cam1_from_cam1 = Matrix3x4d::Identity();
-  const auto in_front = [](double depth1, double depth2) {
-    return depth1 > std::numeric_limits<double>::epsilon() && depth1 < kMaxDepthInBaselines &&
-           depth2 > std::numeric_limits<double>::epsilon() && depth2 < kMaxDepthInBaselines;
-  };
-  std::array<std::vector<Eigen::Vector3d>, 4> candidate_points;
+  // Unit translations: depths are then in baselines, as the cheirality vote expects; a
+  // candidate with no baseline gets no votes.
+  std::vector<Eigen::Matrix3d> rotations;
+  std::vector<Eigen::Vector3d> unit_translations;
   for (int candidate = 0; candidate < num_candidates; ++candidate) {
     const Eigen::Vector3d& translation = candidates[candidate].translation_over_distance;
     const double baseline = translation.norm();
-    if (!(baseline > 0.0) || !candidates[candidate].rotation.allFinite()) continue;
-    Matrix3x4d cam2_from_cam1_matrix;
-    cam2_from_cam1_matrix << candidates[candidate].rotation, translation / baseline;
-    for (size_t i = 0; i < points1.size(); ++i) {
-      const std::optional<Eigen::Vector3d> point3D =
-          TriangulatePoint(cam1_from_cam1, cam2_from_cam1_matrix, points1[i], points2[i]);
-      if (!point3D) continue;
-      const double depth1 = (*point3D)(2);
-      const double depth2 = cam2_from_cam1_matrix.row(2).dot(point3D->homogeneous());
-      if (in_front(depth1, depth2)) {
-        candidate_points[2 * candidate].push_back(*point3D);
-      } else if (in_front(-depth1, -depth2)) {
-        candidate_points[2 * candidate + 1].push_back(-*point3D);
-      }
-    }
+    rotations.push_back(candidates[candidate].rotation);
+    unit_translations.push_back(
+        baseline > 0.0 ? Eigen::Vector3d(translation / baseline)
+                       : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
   }
-  int best_candidate = 0;
-  for (int candidate = 1; candidate < 4; ++candidate) {
-    if (candidate_points[candidate].size() > candidate_points[best_candidate].size()) {
-      best_candidate = candidate;
-    }
-  }
-  points3D->swap(candidate_points[best_candidate]);
+  const int best_candidate =
+      std::max(0, ChoosePoseByCheirality(rotations, unit_translations, points1, points2, points3D));
 
   // Too little baseline for any point to triangulate in front is a rotation as well.
   const Eigen::Matrix3d& rotation = candidates[best_candidate / 2].rotation;
