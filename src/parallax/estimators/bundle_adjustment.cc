@@ -58,27 +58,25 @@ void ChooseLinearSolver(size_t num_images, ceres::Solver::Options* solver_option
   solver_options->preconditioner_type = ceres::SCHUR_JACOBI;
 }
 
-// Parameter blocks copied into one buffer, in the order they were added; Solve works on the
-// copies and CopyBack writes them to the model.
+// Parameter blocks copied into one buffer, in the order they were added; the solver works on
+// the copies and CopyBack writes them to the model.
 class ParameterArena {
  public:
   void Add(double* block, int size) {
-    if (offsets_.count(block) > 0) return;
-    offsets_.emplace(block, values_.size());
-    blocks_.push_back({block, size});
+    if (!offsets_.emplace(block, values_.size()).second) return;  // Added already.
+    blocks_.push_back({block, values_.size(), size});
     values_.resize(values_.size() + static_cast<size_t>(size));
   }
   // Copies the model's values in; no Add after this (the buffer must not move).
-  void Allocate() {
+  void CopyIn() {
     for (const Block& block : blocks_) {
-      std::copy(block.original, block.original + block.size,
-                values_.data() + offsets_[block.original]);
+      std::copy(block.original, block.original + block.size, values_.data() + block.offset);
     }
   }
   double* operator()(double* original) { return values_.data() + offsets_.at(original); }
   void CopyBack() const {
     for (const Block& block : blocks_) {
-      const double* copy = values_.data() + offsets_.at(block.original);
+      const double* copy = values_.data() + block.offset;
       std::copy(copy, copy + block.size, block.original);
     }
   }
@@ -86,6 +84,7 @@ class ParameterArena {
  private:
   struct Block {
     double* original;
+    size_t offset;
     int size;
   };
   std::vector<Block> blocks_;
@@ -181,7 +180,7 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
       arena.Add(params.data(), static_cast<int>(params.size()));
     }
   }
-  arena.Allocate();
+  arena.CopyIn();
 
   // The problem borrows the loss and manifolds: one object each, shared by all blocks.
   const std::unique_ptr<ceres::LossFunction> loss_function =
