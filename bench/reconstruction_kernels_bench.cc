@@ -168,12 +168,3 @@ BENCHMARK(BM_BundleAdjustmentIteration)
 
 }  // namespace
 }  // namespace parallax
-
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  parallax::SetPRNGSeed(0);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}

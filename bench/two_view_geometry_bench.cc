@@ -168,12 +168,3 @@ BENCHMARK_TEMPLATE(BM_Solver, 100, EstimateFundamentalMatrixEightPoint)
 
 }  // namespace
 }  // namespace parallax
-
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  parallax::SetPRNGSeed(0);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
