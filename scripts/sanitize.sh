@@ -48,7 +48,7 @@ export PARALLAX_DATA="${PARALLAX_DATA:-$(cd .. && pwd)/shared/data}"
 # scene, and the repeated reconstructions of the resume and determinism tests (minutes each
 # under ASan; the normal test job runs them), and two numerical tests whose tolerances hold
 # for GCC's floating-point summation order but not clang's (no sanitizer involved).
-heavy='TempleRingWithKnownIntrinsics|TempleRingFirstViews|TempleRingFigures|FramesTheTempleRing'
+heavy='TempleRingTest\.|TempleRingFirstViews|TempleRingFigures|FramesTheTempleRing'
 heavy+='|CheckerboardDataset|SyntheticTempleThirtyViews|ResumeTest|DeterminismTest'
 numeric='NoisyObservationsReachNoiseLevel|EssentialMatrixLoRansac.NoiseAndFortyPercentOutliers'
 ctest --test-dir "$build" --output-on-failure -j"$jobs" --timeout 900 -E "$heavy|$numeric"

@@ -35,57 +35,66 @@ TEST(ReconstructionPipeline, SyntheticTempleThirtyViews) {
   const EvaluationMetrics metrics =
       EvaluateReconstruction(model, ReadGroundTruth(dir / "scene" / (scene.name + "_par.txt")));
   EXPECT_LT(metrics.rotation_error_deg.median, 0.1);
-  for (const char* file : {"sparse/0/cameras.txt", "sparse/0/images.bin", "points.ply", "summary.json"}) {
+  for (const char* file :
+       {"sparse/0/cameras.txt", "sparse/0/images.bin", "points.ply", "summary.json"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
   }
   std::filesystem::remove_all(dir);
 }
 
-// templeRing with the ground-truth K: registration and accuracy against the ground truth.
-TEST(ReconstructionPipeline, TempleRingWithKnownIntrinsics) {
-  const auto data = DataRoot() / "templeRing";
-  if (!std::filesystem::exists(data / "templeR_par.txt")) GTEST_SKIP() << "no " << data;
-  const auto dir = TempDir("pipeline_temple");
-  const GroundTruth truth = ReadGroundTruth(data / "templeR_par.txt");
-  const Eigen::Matrix3d K = truth.images.front().camera.CalibrationMatrix();
-  std::ofstream(dir / "K.txt") << K << "\n";
+// templeRing reconstructed end to end into a fresh folder, evaluated against its ground truth.
+class TempleRingTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    data_ = DataRoot() / "templeRing";
+    if (!std::filesystem::exists(data_ / "templeR_par.txt")) GTEST_SKIP() << "no " << data_;
+    truth_ = ReadGroundTruth(data_ / "templeR_par.txt");
+    dir_ = TempDir("pipeline_" +
+                   std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  }
+  void TearDown() override {
+    if (!dir_.empty()) std::filesystem::remove_all(dir_);
+  }
+
+  // Runs the pipeline; `model_` and `metrics_` describe its largest model.
+  void Reconstruct(const ReconstructionPipelineOptions& options) {
+    const ReconstructionPipelineResult result =
+        RunReconstructionPipeline(options, data_ / "images", dir_ / "out");
+    ASSERT_TRUE(result.Success());
+    model_ = result.mapping.models.front();
+    metrics_ = EvaluateReconstruction(model_, truth_);
+    std::cout << MetricsToText(metrics_) << std::endl;
+  }
+
+  std::filesystem::path data_, dir_;
+  GroundTruth truth_;
+  Reconstruction model_;
+  EvaluationMetrics metrics_;
+};
+
+// With the ground-truth K: registration and accuracy against the ground truth.
+TEST_F(TempleRingTest, KnownIntrinsics) {
+  std::ofstream(dir_ / "K.txt") << truth_.images.front().camera.CalibrationMatrix() << "\n";
   ReconstructionPipelineOptions options;
-  options.extraction.camera.intrinsics_path = dir / "K.txt";
-  const ReconstructionPipelineResult result =
-      RunReconstructionPipeline(options, data / "images", dir / "out");
-  ASSERT_TRUE(result.Success());
-  const Reconstruction& model = result.mapping.models.front();
-  const EvaluationMetrics metrics = EvaluateReconstruction(model, truth);
-  std::cout << MetricsToText(metrics) << std::endl;
-  EXPECT_EQ(model.NumRegImages(), 47u);
-  EXPECT_LE(metrics.center_error.median, 0.0013);  // Metres.
-  EXPECT_LE(metrics.rotation_error_deg.median, 0.2);
-  EXPECT_LE(metrics.mean_reprojection_error_px, 0.5);
-  EXPECT_GE(model.NumPoints3D(), 7500u);  // COLMAP 3.8: 7,649 on the same images.
-  std::filesystem::remove_all(dir);
+  options.extraction.camera.intrinsics_path = dir_ / "K.txt";
+  ASSERT_NO_FATAL_FAILURE(Reconstruct(options));
+  EXPECT_EQ(model_.NumRegImages(), 47u);
+  EXPECT_LE(metrics_.center_error.median, 0.0013);  // Metres.
+  EXPECT_LE(metrics_.rotation_error_deg.median, 0.2);
+  EXPECT_LE(metrics_.mean_reprojection_error_px, 0.5);
+  EXPECT_GE(model_.NumPoints3D(), 7500u);  // COLMAP 3.8: 7,649 on the same images.
 }
 
-// templeRing with no intrinsics at all (issue 5): the focal length starts from the prior of
+// With no intrinsics at all (issue 5): the focal length starts from the prior of
 // 1.2 x 640 px = 768 px and bundle adjustment must find the true 1520 px.
-TEST(ReconstructionPipeline, TempleRingWithoutIntrinsics) {
-  const auto data = DataRoot() / "templeRing";
-  if (!std::filesystem::exists(data / "templeR_par.txt")) GTEST_SKIP() << "no " << data;
-  const auto dir = TempDir("pipeline_temple_uncalibrated");
-  const GroundTruth truth = ReadGroundTruth(data / "templeR_par.txt");
-  const ReconstructionPipelineResult result =
-      RunReconstructionPipeline(ReconstructionPipelineOptions(), data / "images", dir / "out");
-  ASSERT_TRUE(result.Success());
-  const Reconstruction& model = result.mapping.models.front();
-  const EvaluationMetrics metrics = EvaluateReconstruction(model, truth);
-  std::cout << MetricsToText(metrics) << std::endl;
-  EXPECT_GE(model.NumRegImages(), 45u);
-  EXPECT_LE(metrics.center_error.median, 2 * 0.0013);  // Twice the calibrated run's bar.
-  ASSERT_EQ(model.Cameras().size(), 1u);
-  const Camera& camera = model.Cameras().begin()->second;
-  const double focal = camera.params[0];
+TEST_F(TempleRingTest, NoIntrinsics) {
+  ASSERT_NO_FATAL_FAILURE(Reconstruct(ReconstructionPipelineOptions()));
+  EXPECT_GE(model_.NumRegImages(), 45u);
+  EXPECT_LE(metrics_.center_error.median, 2 * 0.0013);  // Twice the calibrated run's bar.
+  ASSERT_EQ(model_.Cameras().size(), 1u);
+  const double focal = model_.Cameras().begin()->second.params[0];
   std::cout << "recovered focal length " << focal << " px (ground truth 1520.4)\n";
   EXPECT_NEAR(focal, 1520.4, 0.02 * 1520.4);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
