@@ -30,7 +30,7 @@ for n in "${counts[@]}"; do
   rm -rf "$run"
   mkdir -p "$run"
   /usr/bin/time -f "%e %M" -o "$run/synth.time" \
-    "$binary" synth --output "$run/images" --views "$n" --layout sequence -q
+    "$binary" synth --output "$run/images" --views "$n" --layout sequence -q >"$run/synth.log"
   /usr/bin/time -f "%e %M" -o "$run/reconstruct.time" \
     "$binary" reconstruct --images "$run/images" --output "$run/out" --pairs sequential \
     --overlap "$overlap" -q >"$run/reconstruct.log" 2>&1 || {
