@@ -16,6 +16,7 @@ namespace fs = std::filesystem;
 
 using test::ExpectFailsWithOneLineError;
 using test::ProcessResult;
+using test::Replace;
 using test::WriteBytes;
 
 class BadInputFilesTest : public ::testing::Test {
@@ -69,13 +70,6 @@ class BadInputFilesTest : public ::testing::Test {
 };
 
 test::ScopedTestDir* BadInputFilesTest::scene_ = nullptr;
-
-std::string Replace(std::string text, const std::string& from, const std::string& to) {
-  const size_t pos = text.find(from);
-  EXPECT_NE(pos, std::string::npos) << from;
-  if (pos != std::string::npos) text.replace(pos, from.size(), to);
-  return text;
-}
 
 TEST_F(BadInputFilesTest, ValidFilesEvaluate) {
   // The unbroken inputs the other cases start from do work.

@@ -25,6 +25,7 @@ using test::ExpectFailsWithOneLineError;
 using test::ExpectNoPartialOutput;
 using test::ExpectOneWarningNaming;
 using test::ProcessResult;
+using test::Replace;
 using test::WriteBytes;
 
 class BadInputTest : public ::testing::Test {
@@ -99,13 +100,6 @@ class BadInputTest : public ::testing::Test {
 
 test::ScopedTestDir* BadInputTest::scene_dir_ = nullptr;
 
-
-std::string Replace(std::string text, const std::string& from, const std::string& to) {
-  const size_t pos = text.find(from);
-  EXPECT_NE(pos, std::string::npos) << from;
-  if (pos != std::string::npos) text.replace(pos, from.size(), to);
-  return text;
-}
 
 // ---------------------------------------------------------------------------------------
 // Image files: skipped with one warning each, the good images are used.

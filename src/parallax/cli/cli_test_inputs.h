@@ -26,6 +26,15 @@ inline void WriteBytes(const fs::path& path, const std::string& bytes) {
 
 inline std::string ReadBytes(const fs::path& path) { return ReadFileToString(path); }
 
+// `text` with the first `from` replaced by `to`; a test failure when `from` is not in it (the
+// malformed-file cases start from a valid file and must change it).
+inline std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  if (pos != std::string::npos) text.replace(pos, from.size(), to);
+  return text;
+}
+
 inline std::string EncodeImage(const std::string& extension, const cv::Mat& image) {
   std::vector<uint8_t> buffer;
   EXPECT_TRUE(cv::imencode(extension, image, buffer));
