@@ -166,14 +166,13 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
   for (const point3D_t point3D_id : point3D_ids) {
     arena.Add(reconstruction->GetPoint3D(point3D_id).xyz.data(), 3);
   }
-  for (const std::set<image_t>* image_ids :
-       {&config.images, static_cast<const std::set<image_t>*>(&outside_image_ids)}) {
-    for (const image_t image_id : *image_ids) {
-      Rigid3d& cam_from_world = reconstruction->GetImage(image_id).cam_from_world;
-      arena.Add(cam_from_world.rotation.coeffs().data(), 4);
-      arena.Add(cam_from_world.translation.data(), 3);
-    }
-  }
+  const auto add_pose = [&](image_t image_id) {
+    Rigid3d& cam_from_world = reconstruction->GetImage(image_id).cam_from_world;
+    arena.Add(cam_from_world.rotation.coeffs().data(), 4);
+    arena.Add(cam_from_world.translation.data(), 3);
+  };
+  for (const image_t image_id : config.images) add_pose(image_id);
+  for (const image_t image_id : outside_image_ids) add_pose(image_id);
   for (const auto* camera_ids : {&variable_camera_ids, &outside_camera_ids}) {
     for (const camera_t camera_id : *camera_ids) {
       std::vector<double>& params = reconstruction->GetCamera(camera_id).params;
