@@ -37,6 +37,11 @@ void ExtractionFlags::Add(CLI::App& app, FeatureExtractionOptions* options) {
                  "Longest side in pixels before detection (larger images are downscaled)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--max-upsampled-size", options->sift.max_upsampled_image_size,
+                 "Longest side up to which SIFT's first octave doubles the image; larger images "
+                 "start at their own resolution (0: always double)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-image-pixels", options->reader.max_image_pixels,
                  "Refuse images with more pixels than this, before decoding")
       ->capture_default_str();

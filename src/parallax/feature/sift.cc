@@ -64,6 +64,18 @@ class OpenCvSiftExtractor : public FeatureExtractor {
       scale_x = static_cast<double>(gray.cols) / width;
       scale_y = static_cast<double>(gray.rows) / height;
     }
+    // A half-size image doubled by OpenCV is the original at sigma 1.6: what a Gaussian of
+    // that width leaves above the half-size Nyquist frequency is under 5 %.
+    if (options_.max_upsampled_image_size > 0 &&
+        std::max(image.cols, image.rows) > options_.max_upsampled_image_size) {
+      const int width = std::max(1, image.cols / 2);
+      const int height = std::max(1, image.rows / 2);
+      cv::Mat half;
+      cv::resize(image, half, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+      scale_x *= static_cast<double>(image.cols) / width;
+      scale_y *= static_cast<double>(image.rows) / height;
+      image = half;
+    }
 
     // OpenCV keeps the strongest `nfeatures` before computing descriptors, plus any ties at
     // the boundary response; those are cut below.
@@ -122,6 +134,7 @@ class OpenCvSiftExtractor : public FeatureExtractor {
 void SiftExtractionOptions::Check() const {
   PARALLAX_CHECK_GT(max_num_features, 0);
   PARALLAX_CHECK_GT(max_image_size, 0);
+  PARALLAX_CHECK_GE(max_upsampled_image_size, 0);
   PARALLAX_CHECK_GT(num_octave_layers, 0);
   PARALLAX_CHECK_GT(contrast_threshold, 0.0);
   PARALLAX_CHECK_GT(edge_threshold, 0.0);

@@ -11,6 +11,11 @@ namespace parallax {
 struct SiftExtractionOptions {
   int max_num_features = 8192;       // Keep the strongest (largest response) keypoints.
   int max_image_size = 3200;         // Downscale larger images (longest side), rescale keypoints.
+  // OpenCV's SIFT always doubles the image for its first octave (Lowe's -1 octave). Above this
+  // longest side it is given the half-size image instead, so that octave lands at the image's
+  // own resolution: the doubled octave is three quarters of the work, and on large images its
+  // fine-scale keypoints fall below the max_num_features cut anyway (0: always double).
+  int max_upsampled_image_size = 2000;
   int num_octave_layers = 3;         // Layers per octave.
   double contrast_threshold = 0.04;  // OpenCV convention (divided by layers internally).
   double edge_threshold = 10.0;

@@ -167,6 +167,47 @@ TEST(Sift, LargeImagesAreDownscaledAndKeypointsRescaled) {
   EXPECT_EQ(descriptors_full, descriptors_half);
 }
 
+// Above max_upsampled_image_size the first octave is at the image's own resolution: the
+// detector then sees exactly the half-size image doubled, and finds the same blobs as with
+// the doubled full image except the finest ones.
+TEST(Sift, LargeImagesAreNotUpsampled) {
+  const cv::Mat image = TexturedImage(800, 600, 1500);
+  cv::Mat half;
+  cv::resize(image, half, cv::Size(400, 300), 0, 0, cv::INTER_AREA);
+  SiftExtractionOptions options;
+  options.max_num_features = 100000;
+  FeatureKeypoints keypoints_half, keypoints_own, keypoints_doubled;
+  FeatureDescriptors descriptors_half, descriptors_own, descriptors_doubled;
+  CreateSiftExtractor(options)->Extract(half, &keypoints_half, &descriptors_half);
+  options.max_upsampled_image_size = 600;
+  CreateSiftExtractor(options)->Extract(image, &keypoints_own, &descriptors_own);
+  ASSERT_GT(keypoints_half.size(), 50u);
+  ASSERT_EQ(keypoints_own.size(), keypoints_half.size());
+  for (size_t i = 0; i < keypoints_half.size(); ++i) {
+    EXPECT_FLOAT_EQ(keypoints_own[i].x, 2.0f * keypoints_half[i].x);
+    EXPECT_FLOAT_EQ(keypoints_own[i].y, 2.0f * keypoints_half[i].y);
+  }
+  EXPECT_EQ(descriptors_own, descriptors_half);
+
+  options.max_upsampled_image_size = 0;
+  CreateSiftExtractor(options)->Extract(image, &keypoints_doubled, &descriptors_doubled);
+  EXPECT_GT(keypoints_doubled.size(), keypoints_own.size());
+  size_t num_found = 0;
+  for (const FeatureKeypoint& own : keypoints_own) {
+    for (const FeatureKeypoint& doubled : keypoints_doubled) {
+      const double scale_ratio = doubled.ComputeScale() / own.ComputeScale();
+      if (std::hypot(doubled.x - own.x, doubled.y - own.y) < 0.25 * own.ComputeScale() &&
+          scale_ratio > 0.8 && scale_ratio < 1.25) {
+        ++num_found;
+        break;
+      }
+    }
+  }
+  std::cout << num_found << " of " << keypoints_own.size() << " keypoints also found doubled ("
+            << keypoints_doubled.size() << " there)\n";
+  EXPECT_GT(num_found, 0.8 * keypoints_own.size());
+}
+
 TEST(Sift, EmptyAndFeaturelessImages) {
   const auto extractor = CreateSiftExtractor(SiftExtractionOptions());
   FeatureKeypoints keypoints(3);
