@@ -11,7 +11,16 @@ namespace parallax {
 
 enum class LossFunctionType { kTrivial, kHuber, kSoftLOne, kCauchy };
 
+// Which solver minimises: Parallax's dense Schur LM (dense_schur_bundle_adjuster.h), or Ceres
+// (dense or sparse Schur). Both take the same LM steps; kAuto picks ours while the reduced
+// camera system fits `max_dense_schur_variables`, Ceres' sparse Schur above.
+enum class BundleAdjustmentSolver { kAuto, kDenseSchur, kCeres };
+
 struct BundleAdjustmentOptions {
+  BundleAdjustmentSolver solver = BundleAdjustmentSolver::kAuto;
+  // 6 per variable pose plus the free intrinsics: 900 is 150 images, where a dense Cholesky of
+  // the reduced system (~0.25 GFLOP) starts to cost more than Ceres' sparse one.
+  int max_dense_schur_variables = 900;
   LossFunctionType loss_function = LossFunctionType::kCauchy;
   double loss_scale_px = 1.0;         // Robust loss scale on reprojection error, pixels.
   bool refine_focal_length = false;
@@ -48,12 +57,13 @@ struct BundleAdjustmentSummary {
   int num_iterations = 0;
   size_t num_residuals = 0;
   double seconds = 0;
-  std::string termination;       // Ceres' termination type and message.
+  std::string termination;       // Termination type and message (Ceres' wording).
+  std::string solver;            // Which solver ran, e.g. "dense Schur LM" or "Ceres SPARSE_SCHUR".
 };
 
-// Minimises reprojection error over poses, points and (optionally) intrinsics with Ceres:
-// Levenberg-Marquardt trust region, Schur-complement linear solver (dense for small
-// problems, sparse otherwise), robust loss, multi-threaded.
+// Minimises reprojection error over poses, points and (optionally) intrinsics:
+// Levenberg-Marquardt trust region on the Schur complement (points eliminated), robust loss,
+// multi-threaded. See BundleAdjustmentSolver for which solver runs.
 BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
                                      const BundleAdjustmentConfig& config,
                                      Reconstruction* reconstruction);

@@ -145,8 +145,14 @@ SceneErrors CompareToTruth(const Reconstruction& truth, const Reconstruction& es
   return errors;
 }
 
-BundleAdjustmentOptions TightOptions() {
+BundleAdjustmentOptions SolverOptions(BundleAdjustmentSolver solver) {
   BundleAdjustmentOptions options;
+  options.solver = solver;
+  return options;
+}
+
+BundleAdjustmentOptions TightOptions(BundleAdjustmentSolver solver) {
+  BundleAdjustmentOptions options = SolverOptions(solver);
   options.loss_function = LossFunctionType::kTrivial;
   options.function_tolerance = 1e-14;
   options.gradient_tolerance = 1e-16;
@@ -155,14 +161,17 @@ BundleAdjustmentOptions TightOptions() {
   return options;
 }
 
-TEST(BundleAdjustment, RecoversNoiselessSceneExactly) {
+// Every case runs with both solvers.
+class BundleAdjustmentSolvers : public ::testing::TestWithParam<BundleAdjustmentSolver> {};
+
+TEST_P(BundleAdjustmentSolvers, RecoversNoiselessSceneExactly) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
   const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
   Perturb(config, 1.0, 0.05, 0.05, &estimate);
   EXPECT_GT(CompareToTruth(truth, estimate).max_point, 0.05);
 
-  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(), config, &estimate);
+  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(GetParam()), config, &estimate);
   ASSERT_TRUE(summary.success) << summary.termination;
   EXPECT_EQ(summary.num_residuals, truth.NumObservations());
   EXPECT_GT(summary.num_iterations, 0);
@@ -182,7 +191,8 @@ TEST(BundleAdjustment, RecoversNoiselessSceneExactly) {
   EXPECT_EQ(estimate.GetCamera(1).params, truth.GetCamera(1).params);
 }
 
-TEST(BundleAdjustment, NoisyObservationsReachNoiseLevel) {
+TEST_P(BundleAdjustmentSolvers, NoisyObservationsReachNoiseLevel) {
+  SetPRNGSeed(3);  // Both solvers see the same scene, whichever tests ran before.
   SceneOptions scene;
   scene.noise_px = 0.5;
   const Reconstruction truth = SynthesizeScene(scene);
@@ -191,7 +201,7 @@ TEST(BundleAdjustment, NoisyObservationsReachNoiseLevel) {
   Perturb(config, 0.5, 0.02, 0.02, &estimate);
   const double initial_error = estimate.UpdatePointErrors();
 
-  BundleAdjustmentOptions options = TightOptions();
+  BundleAdjustmentOptions options = TightOptions(GetParam());
   options.function_tolerance = 1e-8;
   const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
   ASSERT_TRUE(summary.success) << summary.termination;
@@ -208,14 +218,14 @@ TEST(BundleAdjustment, NoisyObservationsReachNoiseLevel) {
   EXPECT_LT(errors.max_center, 0.02) << errors.max_center << " " << final_error;
 }
 
-TEST(BundleAdjustment, RefinesFocalLength) {
+TEST_P(BundleAdjustmentSolvers, RefinesFocalLength) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
   const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
   Perturb(config, 0.2, 0.01, 0.01, &estimate);
   estimate.GetCamera(1).SetFocalLength(1.05 * kFocalLength);
 
-  BundleAdjustmentOptions options = TightOptions();
+  BundleAdjustmentOptions options = TightOptions(GetParam());
   options.refine_focal_length = true;
   const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
   ASSERT_TRUE(summary.success) << summary.termination;
@@ -228,7 +238,7 @@ TEST(BundleAdjustment, RefinesFocalLength) {
   EXPECT_LT(CompareToTruth(truth, estimate).max_center, 1e-5);
 }
 
-TEST(BundleAdjustment, RefinesPrincipalPointAndDistortionOnly) {
+TEST_P(BundleAdjustmentSolvers, RefinesPrincipalPointAndDistortionOnly) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
   const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
@@ -237,7 +247,7 @@ TEST(BundleAdjustment, RefinesPrincipalPointAndDistortionOnly) {
   camera.params[2] -= 4;
   camera.params[3] = 0;
 
-  BundleAdjustmentOptions options = TightOptions();
+  BundleAdjustmentOptions options = TightOptions(GetParam());
   options.refine_principal_point = true;
   options.refine_extra_params = true;
   ASSERT_TRUE(BundleAdjust(options, config, &estimate).success);
@@ -248,7 +258,7 @@ TEST(BundleAdjustment, RefinesPrincipalPointAndDistortionOnly) {
   EXPECT_NEAR(camera.params[3], expected[3], 1e-9);
 }
 
-TEST(BundleAdjustment, RobustLossResistsOutliers) {
+TEST_P(BundleAdjustmentSolvers, RobustLossResistsOutliers) {
   // Seeded here so the outcome does not depend on which tests ran before in the process
   // (CTest runs every case in a process of its own).
   SetPRNGSeed(5);
@@ -269,7 +279,7 @@ TEST(BundleAdjustment, RobustLossResistsOutliers) {
   const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
   Perturb(config, 0.5, 0.02, 0.02, &corrupted);
 
-  BundleAdjustmentOptions options = TightOptions();
+  BundleAdjustmentOptions options = TightOptions(GetParam());
   options.function_tolerance = 1e-8;
   Reconstruction trivial = corrupted;
   ASSERT_TRUE(BundleAdjust(options, config, &trivial).success);
@@ -288,7 +298,7 @@ TEST(BundleAdjustment, RobustLossResistsOutliers) {
             << robust_errors.max_center << std::endl;
 }
 
-TEST(BundleAdjustment, ImagesOutsideConfigStayConstant) {
+TEST_P(BundleAdjustmentSolvers, ImagesOutsideConfigStayConstant) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
   // Images 1 and 2 are outside: their observations still constrain the points (and fix the
@@ -296,7 +306,7 @@ TEST(BundleAdjustment, ImagesOutsideConfigStayConstant) {
   BundleAdjustmentConfig config;
   for (image_t image_id = 3; image_id <= 8; ++image_id) config.AddImage(image_id);
   Perturb(config, 1.0, 0.05, 0.05, &estimate);
-  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(), config, &estimate);
+  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(GetParam()), config, &estimate);
   ASSERT_TRUE(summary.success) << summary.termination;
   EXPECT_EQ(summary.num_residuals, truth.NumObservations());
   for (image_t image_id = 1; image_id <= 2; ++image_id) {
@@ -310,7 +320,7 @@ TEST(BundleAdjustment, ImagesOutsideConfigStayConstant) {
   EXPECT_LT(errors.max_point, 1e-6);
 }
 
-TEST(BundleAdjustment, ConstantCamerasAndPointsStayFixed) {
+TEST_P(BundleAdjustmentSolvers, ConstantCamerasAndPointsStayFixed) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
   BundleAdjustmentConfig config = GaugeFixedConfig(truth);
@@ -321,7 +331,7 @@ TEST(BundleAdjustment, ConstantCamerasAndPointsStayFixed) {
   Perturb(config, 0.5, 0.02, 0.0, &estimate);
   estimate.GetPoint3D(1).xyz.x() += 0.01;  // A wrong constant point stays wrong.
   const Eigen::Vector3d fixed_point = estimate.GetPoint3D(1).xyz;
-  BundleAdjustmentOptions options = TightOptions();
+  BundleAdjustmentOptions options = TightOptions(GetParam());
   options.refine_focal_length = true;
   options.refine_extra_params = true;
   ASSERT_TRUE(BundleAdjust(options, config, &estimate).success);
@@ -330,8 +340,8 @@ TEST(BundleAdjustment, ConstantCamerasAndPointsStayFixed) {
   EXPECT_EQ(estimate.GetPoint3D(2).xyz, truth.GetPoint3D(2).xyz);
 }
 
-// Above 150 images the sparse Schur path is taken.
-TEST(BundleAdjustment, LargeProblemUsesSparseSolver) {
+// 160 images: Ceres takes its sparse Schur path; the dense Schur LM a 960-variable Cholesky.
+TEST_P(BundleAdjustmentSolvers, LargeProblem) {
   SceneOptions scene;
   scene.num_images = 160;
   scene.num_points = 800;
@@ -340,17 +350,17 @@ TEST(BundleAdjustment, LargeProblemUsesSparseSolver) {
   Reconstruction estimate = truth;
   const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
   Perturb(config, 0.3, 0.01, 0.01, &estimate);
-  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(), config, &estimate);
+  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(GetParam()), config, &estimate);
   ASSERT_TRUE(summary.success) << summary.termination;
   const SceneErrors errors = CompareToTruth(truth, estimate);
   EXPECT_LT(errors.max_center, 1e-6);
   EXPECT_LT(errors.max_point, 1e-6);
 }
 
-TEST(BundleAdjustment, EmptyOrUnobservedConfigFailsGracefully) {
+TEST_P(BundleAdjustmentSolvers, EmptyOrUnobservedConfigFailsGracefully) {
   Reconstruction reconstruction = SynthesizeScene({});
   BundleAdjustmentConfig config;
-  EXPECT_FALSE(BundleAdjust(BundleAdjustmentOptions(), config, &reconstruction).success);
+  EXPECT_FALSE(BundleAdjust(SolverOptions(GetParam()), config, &reconstruction).success);
 
   Image lonely;
   lonely.image_id = 100;
@@ -360,7 +370,7 @@ TEST(BundleAdjustment, EmptyOrUnobservedConfigFailsGracefully) {
   reconstruction.RegisterImage(100);
   config.AddImage(100);
   const BundleAdjustmentSummary summary =
-      BundleAdjust(BundleAdjustmentOptions(), config, &reconstruction);
+      BundleAdjust(SolverOptions(GetParam()), config, &reconstruction);
   EXPECT_FALSE(summary.success);
   EXPECT_EQ(summary.num_residuals, 0u);
 
@@ -368,7 +378,65 @@ TEST(BundleAdjustment, EmptyOrUnobservedConfigFailsGracefully) {
   config = GaugeFixedConfig(reconstruction);
   config.images.erase(100);
   config.AddImage(100);
-  EXPECT_TRUE(BundleAdjust(BundleAdjustmentOptions(), config, &reconstruction).success);
+  EXPECT_TRUE(BundleAdjust(SolverOptions(GetParam()), config, &reconstruction).success);
+}
+
+INSTANTIATE_TEST_SUITE_P(, BundleAdjustmentSolvers,
+                         ::testing::Values(BundleAdjustmentSolver::kDenseSchur,
+                                           BundleAdjustmentSolver::kCeres),
+                         [](const auto& info) {
+                           return info.param == BundleAdjustmentSolver::kCeres ? "Ceres"
+                                                                               : "DenseSchur";
+                         });
+
+// Same problem, robust loss, intrinsics refined: the two solvers land on one minimum.
+TEST(BundleAdjustment, SolversReachTheSameMinimum) {
+  SetPRNGSeed(11);
+  SceneOptions scene;
+  scene.num_images = 10;
+  scene.num_points = 400;
+  scene.track_length = 5;
+  scene.noise_px = 0.5;
+  const Reconstruction truth = SynthesizeScene(scene);
+  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  Reconstruction perturbed = truth;
+  Perturb(config, 0.3, 0.01, 0.01, &perturbed);
+  perturbed.GetCamera(1).params[0] *= 1.02;
+  std::vector<Reconstruction> results;
+  std::vector<BundleAdjustmentSummary> summaries;
+  for (const auto solver : {BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kCeres}) {
+    BundleAdjustmentOptions options = TightOptions(solver);
+    options.loss_function = LossFunctionType::kCauchy;
+    options.refine_focal_length = true;
+    options.refine_extra_params = true;
+    results.push_back(perturbed);
+    summaries.push_back(BundleAdjust(options, config, &results.back()));
+    ASSERT_TRUE(summaries.back().success) << summaries.back().termination;
+  }
+  EXPECT_EQ(summaries[0].solver, "dense Schur LM");
+  EXPECT_EQ(summaries[1].solver, "Ceres DENSE_SCHUR");
+  EXPECT_NEAR(summaries[0].initial_cost, summaries[1].initial_cost, 1e-9 * summaries[1].initial_cost);
+  EXPECT_NEAR(summaries[0].final_cost, summaries[1].final_cost, 1e-9 * summaries[1].final_cost);
+  EXPECT_LT(summaries[0].final_cost, 0.1 * summaries[0].initial_cost);
+  const SceneErrors difference = CompareToTruth(results[1], results[0]);
+  EXPECT_LT(difference.max_center, 1e-6);
+  EXPECT_LT(difference.max_point, 1e-6);
+  EXPECT_NEAR(results[0].GetCamera(1).params[0], results[1].GetCamera(1).params[0], 1e-6);
+  EXPECT_NEAR(results[0].GetCamera(1).params[3], results[1].GetCamera(1).params[3], 1e-9);
+}
+
+// kAuto: the dense Schur LM while the reduced system fits, Ceres above.
+TEST(BundleAdjustment, AutoPicksSolverBySize) {
+  SceneOptions scene;
+  scene.num_images = 20;
+  scene.num_points = 100;
+  scene.track_length = 4;
+  Reconstruction reconstruction = SynthesizeScene(scene);
+  const BundleAdjustmentConfig config = GaugeFixedConfig(reconstruction);
+  BundleAdjustmentOptions options;
+  EXPECT_EQ(BundleAdjust(options, config, &reconstruction).solver, "dense Schur LM");
+  options.max_dense_schur_variables = 6 * 18;  // 19 variable poses need 114.
+  EXPECT_EQ(BundleAdjust(options, config, &reconstruction).solver.rfind("Ceres ", 0), 0u);
 }
 
 TEST(BundleAdjustment, OptionsCheck) {
@@ -389,22 +457,25 @@ TEST(BundleAdjustment, DISABLED_Timing47Images8000Points) {
   scene.track_length = 8;
   scene.noise_px = 0.5;
   const Reconstruction truth = SynthesizeScene(scene);
-  Reconstruction estimate = truth;
+  Reconstruction perturbed = truth;
   const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
-  Perturb(config, 0.3, 0.01, 0.01, &estimate);
-  BundleAdjustmentOptions options;
-  if (std::getenv("PARALLAX_BA_REPORT") != nullptr) {
-    options.print_summary = true;  // Ceres' full report at debug level.
-    SetLogLevel(LogLevel::kDebug);
+  Perturb(config, 0.3, 0.01, 0.01, &perturbed);
+  for (const auto solver : {BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kCeres}) {
+    BundleAdjustmentOptions options = SolverOptions(solver);
+    if (std::getenv("PARALLAX_BA_REPORT") != nullptr) {
+      options.print_summary = true;  // The solver's report at debug level.
+      SetLogLevel(LogLevel::kDebug);
+    }
+    Reconstruction estimate = perturbed;
+    const Timer timer;
+    const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
+    std::printf(
+        "BA 47 images, 8000 points, %zu observations, %s: %.3f s wall (%.3f s in BundleAdjust), "
+        "%d iterations, cost %.6g -> %.6g, %s\n",
+        summary.num_residuals, summary.solver.c_str(), timer.ElapsedSeconds(), summary.seconds,
+        summary.num_iterations, summary.initial_cost, summary.final_cost, summary.termination.c_str());
+    EXPECT_TRUE(summary.success);
   }
-  const Timer timer;
-  const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
-  std::printf(
-      "BA 47 images, 8000 points, %zu observations: %.3f s wall (%.3f s in BundleAdjust), "
-      "%d iterations, %s\n",
-      summary.num_residuals, timer.ElapsedSeconds(), summary.seconds, summary.num_iterations,
-      summary.termination.c_str());
-  EXPECT_TRUE(summary.success);
 }
 
 }  // namespace

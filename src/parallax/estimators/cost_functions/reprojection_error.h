@@ -10,6 +10,41 @@
 
 namespace parallax {
 
+// pi_K(point_in_cam) in pixels with its Jacobian d_img_d_cam (2x3) and, when
+// `d_img_d_params` is non-null, the Jacobian with respect to the intrinsics (2 x kNumParams,
+// row-major). Only the projection is differentiated with dual numbers: 3 inputs, plus the
+// intrinsics when asked for.
+template <typename CameraModel>
+inline void ProjectWithJacobians(const double* camera_params, const Eigen::Vector3d& point_in_cam,
+                                 Eigen::Vector2d* img, Eigen::Matrix<double, 2, 3>* d_img_d_cam,
+                                 double* d_img_d_params) {
+  constexpr int kNumParams = CameraModel::kNumParams;
+  if (d_img_d_params != nullptr) {
+    using Jet = ceres::Jet<double, 3 + kNumParams>;
+    Jet params_jet[kNumParams];
+    for (int k = 0; k < kNumParams; ++k) params_jet[k] = Jet(camera_params[k], 3 + k);
+    Jet x, y;
+    CameraModel::ImgFromCam(params_jet, Jet(point_in_cam.x(), 0), Jet(point_in_cam.y(), 1),
+                            Jet(point_in_cam.z(), 2), &x, &y);
+    *img = Eigen::Vector2d(x.a, y.a);
+    d_img_d_cam->row(0) = x.v.template head<3>().transpose();
+    d_img_d_cam->row(1) = y.v.template head<3>().transpose();
+    Eigen::Map<Eigen::Matrix<double, 2, kNumParams, Eigen::RowMajor>> d_params(d_img_d_params);
+    d_params.row(0) = x.v.template tail<kNumParams>().transpose();
+    d_params.row(1) = y.v.template tail<kNumParams>().transpose();
+    return;
+  }
+  using Jet = ceres::Jet<double, 3>;
+  Jet params_jet[kNumParams];
+  for (int k = 0; k < kNumParams; ++k) params_jet[k] = Jet(camera_params[k]);
+  Jet x, y;
+  CameraModel::ImgFromCam(params_jet, Jet(point_in_cam.x(), 0), Jet(point_in_cam.y(), 1),
+                          Jet(point_in_cam.z(), 2), &x, &y);
+  *img = Eigen::Vector2d(x.a, y.a);
+  d_img_d_cam->row(0) = x.v.transpose();
+  d_img_d_cam->row(1) = y.v.transpose();
+}
+
 // Reprojection error of one observation for camera model `CameraModel`:
 //
 //   r = pi_K(R X + t) - x
@@ -94,32 +129,11 @@ class ReprojectionErrorCostFunction
 
     // d pi / d point_in_cam (2x3), and d pi / d params (2xP) when asked for.
     Eigen::Matrix<double, 2, 3> d_img_d_cam;
-    if (jacobians[3] != nullptr) {
-      using Jet = ceres::Jet<double, 3 + kNumParams>;
-      Jet params_jet[kNumParams];
-      for (int k = 0; k < kNumParams; ++k) params_jet[k] = Jet(camera_params[k], 3 + k);
-      Jet x, y;
-      CameraModel::ImgFromCam(params_jet, Jet(point_in_cam.x(), 0), Jet(point_in_cam.y(), 1),
-                              Jet(point_in_cam.z(), 2), &x, &y);
-      residuals[0] = x.a - observed_.x();
-      residuals[1] = y.a - observed_.y();
-      d_img_d_cam.row(0) = x.v.template head<3>().transpose();
-      d_img_d_cam.row(1) = y.v.template head<3>().transpose();
-      Eigen::Map<Eigen::Matrix<double, 2, kNumParams, Eigen::RowMajor>> d_params(jacobians[3]);
-      d_params.row(0) = x.v.template tail<kNumParams>().transpose();
-      d_params.row(1) = y.v.template tail<kNumParams>().transpose();
-    } else {
-      using Jet = ceres::Jet<double, 3>;
-      Jet params_jet[kNumParams];
-      for (int k = 0; k < kNumParams; ++k) params_jet[k] = Jet(camera_params[k]);
-      Jet x, y;
-      CameraModel::ImgFromCam(params_jet, Jet(point_in_cam.x(), 0), Jet(point_in_cam.y(), 1),
-                              Jet(point_in_cam.z(), 2), &x, &y);
-      residuals[0] = x.a - observed_.x();
-      residuals[1] = y.a - observed_.y();
-      d_img_d_cam.row(0) = x.v.transpose();
-      d_img_d_cam.row(1) = y.v.transpose();
-    }
+    Eigen::Vector2d img;
+    ProjectWithJacobians<CameraModel>(camera_params, point_in_cam, &img, &d_img_d_cam,
+                                      jacobians[3]);
+    residuals[0] = img.x() - observed_.x();
+    residuals[1] = img.y() - observed_.y();
 
     if (jacobians[0] != nullptr) {
       // d(R X)/dv = -2w [X]x + 2((v.X) I + v X^T - 2 X v^T);  d(R X)/dw = 2 v x X.

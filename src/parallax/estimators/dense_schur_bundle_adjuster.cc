@@ -1,0 +1,656 @@
+#include "parallax/estimators/dense_schur_bundle_adjuster.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "parallax/estimators/cost_functions/reprojection_error.h"
+#include "parallax/util/check.h"
+#include "parallax/util/logging.h"
+#include "parallax/util/threading.h"
+
+namespace parallax {
+namespace {
+
+// Ceres' trust-region constants, so that both solvers take the same steps.
+constexpr double kInitialRadius = 1e4;
+constexpr double kMaxRadius = 1e16;
+constexpr double kMinRadius = 1e-32;
+constexpr double kMinDiagonal = 1e-6;
+constexpr double kMaxDiagonal = 1e32;
+constexpr double kMinRelativeDecrease = 1e-3;
+constexpr int kMaxCameraParams = 8;  // OPENCV's.
+
+using Matrix26 = Eigen::Matrix<double, 2, 6>;
+using Matrix23 = Eigen::Matrix<double, 2, 3>;
+using Matrix2C = Eigen::Matrix<double, 2, kMaxCameraParams>;
+using Matrix63 = Eigen::Matrix<double, 6, 3>;
+using MatrixC3 = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kMaxCameraParams, 3>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+using ProjectFn = void (*)(const double*, const Eigen::Vector3d&, Eigen::Vector2d*, Matrix23*,
+                           double*);
+using ImgFromCamFn = void (*)(const double*, double, double, double, double*, double*);
+
+// The solver's copy of the variables: the problem's blocks are written only at the end.
+struct Parameters {
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Vector3d> translations;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::vector<double>> camera_params;
+};
+
+// One observation's (loss-corrected) residual and Jacobians at the current parameters:
+// pose columns are the rotation increment (left-multiplied rotation vector), then the
+// translation; camera columns are the free intrinsics in order.
+struct ObservationJacobian {
+  Eigen::Vector2d residual;
+  Matrix26 pose;
+  Matrix23 point;
+};
+
+class DenseSchurSolver {
+ public:
+  DenseSchurSolver(const BundleAdjustmentOptions& options, const ceres::LossFunction* loss,
+                   BundleAdjustmentProblem* problem)
+      : options_(options), loss_(loss), problem_(*problem) {
+    Layout();
+    CopyIn();
+  }
+
+  BundleAdjustmentSummary Solve();
+
+ private:
+  void Layout();
+  void CopyIn();
+  void CopyOut() const;
+  // Cost 0.5 sum rho(|r|^2) at `parameters`; with `linearize`, also the Jacobians, the
+  // undamped reduced-system blocks U and g_c and the per-point V and g_p at them.
+  double Evaluate(const Parameters& parameters, bool linearize);
+  // Solves the damped system for `radius`; false when it is not positive definite.
+  bool ComputeStep(double radius, Eigen::VectorXd* camera_step,
+                   std::vector<Eigen::Vector3d>* point_step);
+  double ModelCostChange(const Eigen::VectorXd& camera_step,
+                         const std::vector<Eigen::Vector3d>& point_step) const;
+  void ApplyStep(const Eigen::VectorXd& camera_step, const std::vector<Eigen::Vector3d>& point_step,
+                 Parameters* candidate) const;
+  double ParameterNorm(const Parameters& parameters) const;
+  int NumChunks() const { return static_cast<int>(chunk_begin_.size()) - 1; }
+
+  const BundleAdjustmentOptions& options_;
+  const ceres::LossFunction* loss_;
+  BundleAdjustmentProblem& problem_;
+  int num_threads_ = 1;
+
+  // Reduced system layout: offsets of variable poses and cameras (-1: constant).
+  std::vector<int> pose_offset_;
+  std::vector<int> camera_offset_;
+  std::vector<int> camera_dim_;
+  int num_camera_variables_ = 0;
+  std::vector<ProjectFn> project_;
+  std::vector<ImgFromCamFn> img_from_cam_;
+
+  // Observations grouped by point, and the points split into chunks of about equal work
+  // (one partial reduced system each, summed in chunk order: deterministic per thread count).
+  std::vector<int> observation_order_;
+  std::vector<size_t> point_begin_;
+  std::vector<int> chunk_begin_;
+
+  Parameters parameters_;
+  std::vector<ObservationJacobian> jacobians_;  // In observation_order_.
+  std::vector<Matrix2C> camera_jacobians_;      // Only when some camera is free.
+  Eigen::MatrixXd u_;                           // Lower triangle.
+  Eigen::VectorXd g_camera_;
+  std::vector<Eigen::Matrix3d> v_;
+  std::vector<Eigen::Vector3d> g_point_;
+  std::vector<Eigen::Matrix3d> v_inverse_;  // Damped, from the last ComputeStep.
+  std::vector<Eigen::MatrixXd> partial_s_;
+  std::vector<Eigen::VectorXd> partial_b_;
+};
+
+void DenseSchurSolver::Layout() {
+  num_threads_ = std::min(EffectiveNumThreads(options_.num_threads), EffectiveNumThreads(-1));
+  const size_t num_poses = problem_.poses.size();
+  pose_offset_.assign(num_poses, -1);
+  for (size_t i = 0; i < num_poses; ++i) {
+    const auto& pose = problem_.poses[i];
+    if (pose.constant || pose.num_observations == 0) continue;
+    pose_offset_[i] = num_camera_variables_;
+    num_camera_variables_ += 6;
+  }
+  const size_t num_cameras = problem_.cameras.size();
+  camera_offset_.assign(num_cameras, -1);
+  camera_dim_.assign(num_cameras, 0);
+  project_.resize(num_cameras);
+  img_from_cam_.resize(num_cameras);
+  for (size_t c = 0; c < num_cameras; ++c) {
+    const auto& block = problem_.cameras[c];
+    const CameraModelId model_id = block.camera->model_id;
+    project_[c] = VisitCameraModel(model_id, []<typename Model>() -> ProjectFn {
+      return &ProjectWithJacobians<Model>;
+    });
+    img_from_cam_[c] = VisitCameraModel(model_id, []<typename Model>() -> ImgFromCamFn {
+      return &Model::template ImgFromCam<double>;
+    });
+    PARALLAX_CHECK_LE(block.camera->params.size(), static_cast<size_t>(kMaxCameraParams));
+    if (block.free_params.empty() || block.num_observations == 0) continue;
+    camera_offset_[c] = num_camera_variables_;
+    camera_dim_[c] = static_cast<int>(block.free_params.size());
+    num_camera_variables_ += camera_dim_[c];
+  }
+
+  // Counting sort of the observations by point (stable: problem order within a point).
+  const size_t num_points = problem_.points.size();
+  point_begin_.assign(num_points + 1, 0);
+  for (const auto& observation : problem_.observations) ++point_begin_[observation.point + 1];
+  for (size_t j = 0; j < num_points; ++j) point_begin_[j + 1] += point_begin_[j];
+  observation_order_.resize(problem_.observations.size());
+  std::vector<size_t> next(point_begin_.begin(), point_begin_.end() - 1);
+  for (size_t k = 0; k < problem_.observations.size(); ++k) {
+    observation_order_[next[problem_.observations[k].point]++] = static_cast<int>(k);
+  }
+
+  // Chunks by observation count; their number is the thread count, so that a given thread
+  // count always sums the same partial systems in the same order.
+  const int num_chunks = std::max(1, std::min<int>(num_threads_, static_cast<int>(num_points)));
+  chunk_begin_.assign(1, 0);
+  const size_t num_observations = problem_.observations.size();
+  for (int chunk = 1; chunk < num_chunks; ++chunk) {
+    const size_t target = num_observations * chunk / num_chunks;
+    const auto it = std::lower_bound(point_begin_.begin(), point_begin_.end(), target);
+    chunk_begin_.push_back(
+        std::max(chunk_begin_.back(), static_cast<int>(it - point_begin_.begin())));
+  }
+  chunk_begin_.push_back(static_cast<int>(num_points));
+
+  jacobians_.resize(num_observations);
+  const bool any_free_camera =
+      std::any_of(camera_offset_.begin(), camera_offset_.end(), [](int offset) { return offset >= 0; });
+  if (any_free_camera) camera_jacobians_.resize(num_observations);
+  v_.resize(num_points);
+  g_point_.resize(num_points);
+  v_inverse_.resize(num_points);
+  partial_s_.assign(NumChunks(), Eigen::MatrixXd());
+  partial_b_.assign(NumChunks(), Eigen::VectorXd());
+}
+
+void DenseSchurSolver::CopyIn() {
+  for (const auto& pose : problem_.poses) {
+    parameters_.rotations.push_back(pose.cam_from_world->rotation.normalized());
+    parameters_.translations.push_back(pose.cam_from_world->translation);
+  }
+  for (const auto& point : problem_.points) parameters_.points.push_back(*point.xyz);
+  for (const auto& block : problem_.cameras) parameters_.camera_params.push_back(block.camera->params);
+}
+
+void DenseSchurSolver::CopyOut() const {
+  for (size_t i = 0; i < problem_.poses.size(); ++i) {
+    if (pose_offset_[i] < 0) continue;
+    problem_.poses[i].cam_from_world->rotation = parameters_.rotations[i];
+    problem_.poses[i].cam_from_world->translation = parameters_.translations[i];
+  }
+  for (size_t j = 0; j < problem_.points.size(); ++j) {
+    if (!problem_.points[j].constant) *problem_.points[j].xyz = parameters_.points[j];
+  }
+  for (size_t c = 0; c < problem_.cameras.size(); ++c) {
+    if (camera_offset_[c] >= 0) problem_.cameras[c].camera->params = parameters_.camera_params[c];
+  }
+}
+
+double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) {
+  std::vector<Eigen::Matrix3d> rotations(parameters.rotations.size());
+  for (size_t i = 0; i < rotations.size(); ++i) {
+    rotations[i] = parameters.rotations[i].toRotationMatrix();
+  }
+  const int n = num_camera_variables_;
+  std::vector<double> chunk_cost(NumChunks(), 0.0);
+  ParallelFor(0, static_cast<size_t>(NumChunks()), num_threads_, [&](size_t chunk) {
+    Eigen::MatrixXd* u = nullptr;
+    Eigen::VectorXd* g = nullptr;
+    if (linearize) {
+      u = &partial_s_[chunk];
+      g = &partial_b_[chunk];
+      u->setZero(n, n);
+      g->setZero(n);
+    }
+    double cost = 0;
+    for (int j = chunk_begin_[chunk]; j < chunk_begin_[chunk + 1]; ++j) {
+      const Eigen::Vector3d& point = parameters.points[j];
+      Eigen::Matrix3d v = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d g_point = Eigen::Vector3d::Zero();
+      for (size_t k = point_begin_[j]; k < point_begin_[j + 1]; ++k) {
+        const auto& observation = problem_.observations[observation_order_[k]];
+        const int p = observation.pose;
+        const int c = observation.camera;
+        const double* params = parameters.camera_params[c].data();
+        const Eigen::Vector3d rotated = rotations[p] * point;
+        const Eigen::Vector3d point_in_cam = rotated + parameters.translations[p];
+        if (!linearize) {
+          double x, y;
+          img_from_cam_[c](params, point_in_cam.x(), point_in_cam.y(), point_in_cam.z(), &x, &y);
+          const double squared_norm =
+              (Eigen::Vector2d(x, y) - observation.xy).squaredNorm();
+          if (loss_ == nullptr) {
+            cost += 0.5 * squared_norm;
+          } else {
+            double rho[3];
+            loss_->Evaluate(squared_norm, rho);
+            cost += 0.5 * rho[0];
+          }
+          continue;
+        }
+        ObservationJacobian& jacobian = jacobians_[k];
+        Eigen::Vector2d img;
+        Matrix23 d_img_d_cam;
+        double d_img_d_params[2 * kMaxCameraParams];
+        const int camera_offset = camera_offset_[c];
+        project_[c](params, point_in_cam, &img, &d_img_d_cam,
+                    camera_offset >= 0 ? d_img_d_params : nullptr);
+        jacobian.residual = img - observation.xy;
+        // d(R X)/d(rotation vector) for R <- exp([w]x) R is -[R X]x.
+        Eigen::Matrix3d minus_skew;
+        minus_skew << 0, rotated.z(), -rotated.y(), -rotated.z(), 0, rotated.x(), rotated.y(),
+            -rotated.x(), 0;
+        jacobian.pose.leftCols<3>() = d_img_d_cam * minus_skew;
+        jacobian.pose.rightCols<3>() = d_img_d_cam;
+        const auto& pose = problem_.poses[p];
+        for (int axis = 0; axis < 3; ++axis) {
+          if (pose.constant_translation[axis]) jacobian.pose.col(3 + axis).setZero();
+        }
+        jacobian.point = d_img_d_cam * rotations[p];
+        Matrix2C* camera_jacobian = nullptr;
+        const int dim = camera_dim_[c];
+        if (camera_offset >= 0) {
+          camera_jacobian = &camera_jacobians_[k];
+          const int num_params = static_cast<int>(parameters.camera_params[c].size());
+          const std::vector<int>& free = problem_.cameras[c].free_params;
+          for (int f = 0; f < dim; ++f) {
+            camera_jacobian->col(f) << d_img_d_params[free[f]],
+                d_img_d_params[num_params + free[f]];
+          }
+        }
+        // Ceres' corrector for rho'' <= 0: residual and Jacobian times sqrt(rho').
+        const double squared_norm = jacobian.residual.squaredNorm();
+        if (loss_ == nullptr) {
+          cost += 0.5 * squared_norm;
+        } else {
+          double rho[3];
+          loss_->Evaluate(squared_norm, rho);
+          cost += 0.5 * rho[0];
+          const double scale = std::sqrt(std::max(rho[1], 0.0));
+          jacobian.residual *= scale;
+          jacobian.pose *= scale;
+          jacobian.point *= scale;
+          if (camera_jacobian != nullptr) camera_jacobian->leftCols(dim) *= scale;
+        }
+        const int pose_offset = pose_offset_[p];
+        if (pose_offset >= 0) {
+          u->block<6, 6>(pose_offset, pose_offset).noalias() += jacobian.pose.transpose() * jacobian.pose;
+          g->segment<6>(pose_offset).noalias() += jacobian.pose.transpose() * jacobian.residual;
+        }
+        if (camera_offset >= 0) {
+          const auto camera_block = camera_jacobian->leftCols(dim);
+          u->block(camera_offset, camera_offset, dim, dim).noalias() +=
+              camera_block.transpose() * camera_block;
+          g->segment(camera_offset, dim).noalias() += camera_block.transpose() * jacobian.residual;
+          if (pose_offset >= 0) {
+            // Lower triangle: the later block's rows.
+            if (camera_offset > pose_offset) {
+              u->block(camera_offset, pose_offset, dim, 6).noalias() +=
+                  camera_block.transpose() * jacobian.pose;
+            } else {
+              u->block(pose_offset, camera_offset, 6, dim).noalias() +=
+                  jacobian.pose.transpose() * camera_block;
+            }
+          }
+        }
+        v.noalias() += jacobian.point.transpose() * jacobian.point;
+        g_point.noalias() += jacobian.point.transpose() * jacobian.residual;
+      }
+      if (linearize) {
+        v_[j] = v;
+        g_point_[j] = g_point;
+      }
+    }
+    chunk_cost[chunk] = cost;
+  });
+  if (linearize) {
+    u_ = partial_s_[0];
+    g_camera_ = partial_b_[0];
+    for (int chunk = 1; chunk < NumChunks(); ++chunk) {
+      u_ += partial_s_[chunk];
+      g_camera_ += partial_b_[chunk];
+    }
+  }
+  double cost = 0;
+  for (const double value : chunk_cost) cost += value;
+  return cost;
+}
+
+bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
+                                   std::vector<Eigen::Vector3d>* point_step) {
+  const int n = num_camera_variables_;
+  const auto damping = [radius](double diagonal) {
+    return std::clamp(diagonal, kMinDiagonal, kMaxDiagonal) / radius;
+  };
+  // Per chunk: S_chunk = -sum_j W_j V_j^-1 W_j^T and b_chunk = sum_j W_j V_j^-1 g_j over its
+  // points, lower triangle only; W_j's rows are the pose and camera blocks of j's views.
+  ParallelFor(0, static_cast<size_t>(NumChunks()), num_threads_, [&](size_t chunk) {
+    Eigen::MatrixXd& s = partial_s_[chunk];
+    Eigen::VectorXd& b = partial_b_[chunk];
+    s.setZero(n, n);
+    b.setZero(n);
+    std::vector<Matrix63> w_pose, y_pose;
+    std::vector<MatrixC3> w_camera, y_camera;
+    for (int j = chunk_begin_[chunk]; j < chunk_begin_[chunk + 1]; ++j) {
+      if (problem_.points[j].constant) continue;
+      Eigen::Matrix3d v = v_[j];
+      for (int d = 0; d < 3; ++d) v(d, d) += damping(v(d, d));
+      const Eigen::LLT<Eigen::Matrix3d> llt(v);
+      if (llt.info() != Eigen::Success) {
+        v_inverse_[j].setZero();  // A point no view constrains stays where it is.
+        continue;
+      }
+      v_inverse_[j] = llt.solve(Eigen::Matrix3d::Identity());
+      const size_t begin = point_begin_[j];
+      const size_t m = point_begin_[j + 1] - begin;
+      w_pose.resize(m);
+      y_pose.resize(m);
+      w_camera.resize(m);
+      y_camera.resize(m);
+      for (size_t a = 0; a < m; ++a) {
+        const size_t k = begin + a;
+        const auto& observation = problem_.observations[observation_order_[k]];
+        const ObservationJacobian& jacobian = jacobians_[k];
+        if (pose_offset_[observation.pose] >= 0) {
+          w_pose[a].noalias() = jacobian.pose.transpose() * jacobian.point;
+          y_pose[a].noalias() = w_pose[a] * v_inverse_[j];
+          b.segment<6>(pose_offset_[observation.pose]).noalias() += y_pose[a] * g_point_[j];
+        }
+        const int c = observation.camera;
+        if (camera_offset_[c] >= 0) {
+          w_camera[a].noalias() =
+              camera_jacobians_[k].leftCols(camera_dim_[c]).transpose() * jacobian.point;
+          y_camera[a].noalias() = w_camera[a] * v_inverse_[j];
+          b.segment(camera_offset_[c], camera_dim_[c]).noalias() += y_camera[a] * g_point_[j];
+        }
+      }
+      // Block (a, b) of the sum is Y_a W_b^T; only blocks on or below the diagonal are
+      // written, each once: pairs b <= a, and for b == a the two segments in one order.
+      for (size_t a = 0; a < m; ++a) {
+        const auto& obs_a = problem_.observations[observation_order_[begin + a]];
+        const int pose_a = pose_offset_[obs_a.pose];
+        const int camera_a = camera_offset_[obs_a.camera];
+        const int dim_a = camera_dim_[obs_a.camera];
+        for (size_t bi = 0; bi <= a; ++bi) {
+          const auto& obs_b = problem_.observations[observation_order_[begin + bi]];
+          const int pose_b = pose_offset_[obs_b.pose];
+          const int camera_b = camera_offset_[obs_b.camera];
+          const int dim_b = camera_dim_[obs_b.camera];
+          if (pose_a >= 0 && pose_b >= 0) {
+            if (pose_a > pose_b) {
+              s.block<6, 6>(pose_a, pose_b).noalias() -= y_pose[a] * w_pose[bi].transpose();
+            } else if (pose_a < pose_b) {
+              s.block<6, 6>(pose_b, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
+            } else {
+              // The diagonal block; (a, b) and (b, a) both land here only if one image
+              // observed the point twice.
+              s.block<6, 6>(pose_a, pose_a).noalias() -= y_pose[a] * w_pose[bi].transpose();
+              if (bi != a) s.block<6, 6>(pose_a, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
+            }
+          }
+          if (camera_a >= 0 && camera_b >= 0) {
+            auto block = s.block(std::max(camera_a, camera_b), std::min(camera_a, camera_b),
+                                 camera_a >= camera_b ? dim_a : dim_b,
+                                 camera_a >= camera_b ? dim_b : dim_a);
+            if (camera_a > camera_b) {
+              block.noalias() -= y_camera[a] * w_camera[bi].transpose();
+            } else if (camera_a < camera_b) {
+              block.noalias() -= w_camera[bi] * y_camera[a].transpose();
+            } else {
+              // Shared intrinsics: (a, b) and (b, a) land on the same diagonal block.
+              block.noalias() -= y_camera[a] * w_camera[bi].transpose();
+              if (bi != a) block.noalias() -= w_camera[bi] * y_camera[a].transpose();
+            }
+          }
+          // Cross blocks pose(a)-camera(b), and pose(b)-camera(a) when b != a.
+          const auto cross = [&](int pose_offset, const Matrix63& y_or_w_pose, int camera_offset,
+                                 int dim, const MatrixC3& w_or_y_camera) {
+            if (pose_offset < 0 || camera_offset < 0) return;
+            if (camera_offset > pose_offset) {
+              s.block(camera_offset, pose_offset, dim, 6).noalias() -=
+                  w_or_y_camera * y_or_w_pose.transpose();
+            } else {
+              s.block(pose_offset, camera_offset, 6, dim).noalias() -=
+                  y_or_w_pose * w_or_y_camera.transpose();
+            }
+          };
+          if (pose_a >= 0 && camera_b >= 0) cross(pose_a, y_pose[a], camera_b, dim_b, w_camera[bi]);
+          if (bi != a && pose_b >= 0 && camera_a >= 0) {
+            cross(pose_b, w_pose[bi], camera_a, dim_a, y_camera[a]);
+          }
+        }
+      }
+    }
+  });
+
+  Eigen::MatrixXd s = u_;
+  Eigen::VectorXd b = -g_camera_;
+  for (int chunk = 0; chunk < NumChunks(); ++chunk) {
+    s += partial_s_[chunk];
+    b += partial_b_[chunk];
+  }
+  for (int d = 0; d < n; ++d) s(d, d) += damping(u_(d, d));
+  camera_step->setZero(n);
+  if (n > 0) {
+    const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(s);
+    if (llt.info() != Eigen::Success) return false;
+    *camera_step = llt.solve(b);
+    if (!camera_step->allFinite()) return false;
+  }
+
+  // Back-substitution: dX_j = -V_j^-1 (g_j + W_j^T dc).
+  point_step->assign(problem_.points.size(), Eigen::Vector3d::Zero());
+  ParallelFor(0, static_cast<size_t>(NumChunks()), num_threads_, [&](size_t chunk) {
+    for (int j = chunk_begin_[chunk]; j < chunk_begin_[chunk + 1]; ++j) {
+      if (problem_.points[j].constant) continue;
+      Eigen::Vector3d rhs = g_point_[j];
+      for (size_t k = point_begin_[j]; k < point_begin_[j + 1]; ++k) {
+        const auto& observation = problem_.observations[observation_order_[k]];
+        const ObservationJacobian& jacobian = jacobians_[k];
+        Eigen::Vector2d j_step = Eigen::Vector2d::Zero();
+        const int pose_offset = pose_offset_[observation.pose];
+        if (pose_offset >= 0) j_step += jacobian.pose * camera_step->segment<6>(pose_offset);
+        const int c = observation.camera;
+        if (camera_offset_[c] >= 0) {
+          j_step += camera_jacobians_[k].leftCols(camera_dim_[c]) *
+                    camera_step->segment(camera_offset_[c], camera_dim_[c]);
+        }
+        rhs.noalias() += jacobian.point.transpose() * j_step;
+      }
+      (*point_step)[j] = -v_inverse_[j] * rhs;
+    }
+  });
+  return true;
+}
+
+// Ceres' model cost change of the linearised, loss-corrected residuals: -(J d)^T (r + J d / 2).
+double DenseSchurSolver::ModelCostChange(const Eigen::VectorXd& camera_step,
+                                         const std::vector<Eigen::Vector3d>& point_step) const {
+  double change = 0;
+  for (size_t k = 0; k < observation_order_.size(); ++k) {
+    const auto& observation = problem_.observations[observation_order_[k]];
+    const ObservationJacobian& jacobian = jacobians_[k];
+    Eigen::Vector2d j_step = jacobian.point * point_step[observation.point];
+    const int pose_offset = pose_offset_[observation.pose];
+    if (pose_offset >= 0) j_step += jacobian.pose * camera_step.segment<6>(pose_offset);
+    const int c = observation.camera;
+    if (camera_offset_[c] >= 0) {
+      j_step += camera_jacobians_[k].leftCols(camera_dim_[c]) *
+                camera_step.segment(camera_offset_[c], camera_dim_[c]);
+    }
+    change -= j_step.dot(jacobian.residual + 0.5 * j_step);
+  }
+  return change;
+}
+
+void DenseSchurSolver::ApplyStep(const Eigen::VectorXd& camera_step,
+                                 const std::vector<Eigen::Vector3d>& point_step,
+                                 Parameters* candidate) const {
+  *candidate = parameters_;
+  for (size_t i = 0; i < problem_.poses.size(); ++i) {
+    const int offset = pose_offset_[i];
+    if (offset < 0) continue;
+    const Eigen::Vector3d rotation_step = camera_step.segment<3>(offset);
+    const double angle = rotation_step.norm();
+    if (angle > 0) {
+      candidate->rotations[i] =
+          (Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation_step / angle)) *
+           parameters_.rotations[i]).normalized();
+    }
+    candidate->translations[i] += camera_step.segment<3>(offset + 3);
+  }
+  for (size_t j = 0; j < problem_.points.size(); ++j) candidate->points[j] += point_step[j];
+  for (size_t c = 0; c < problem_.cameras.size(); ++c) {
+    const int offset = camera_offset_[c];
+    if (offset < 0) continue;
+    const std::vector<int>& free = problem_.cameras[c].free_params;
+    for (size_t f = 0; f < free.size(); ++f) {
+      candidate->camera_params[c][free[f]] += camera_step[offset + static_cast<int>(f)];
+    }
+  }
+}
+
+// |x| over the variable blocks, as Ceres' parameter tolerance uses it.
+double DenseSchurSolver::ParameterNorm(const Parameters& parameters) const {
+  double squared = 0;
+  for (size_t i = 0; i < problem_.poses.size(); ++i) {
+    if (pose_offset_[i] < 0) continue;
+    squared += parameters.rotations[i].coeffs().squaredNorm() +
+               parameters.translations[i].squaredNorm();
+  }
+  for (size_t j = 0; j < problem_.points.size(); ++j) {
+    if (!problem_.points[j].constant) squared += parameters.points[j].squaredNorm();
+  }
+  for (size_t c = 0; c < problem_.cameras.size(); ++c) {
+    if (camera_offset_[c] < 0) continue;
+    for (const double value : parameters.camera_params[c]) squared += value * value;
+  }
+  return std::sqrt(squared);
+}
+
+BundleAdjustmentSummary DenseSchurSolver::Solve() {
+  BundleAdjustmentSummary summary;
+  summary.solver = "dense Schur LM";
+  summary.num_residuals = problem_.observations.size();
+  double cost = Evaluate(parameters_, /*linearize=*/true);
+  summary.initial_cost = cost;
+  summary.final_cost = cost;
+  if (!std::isfinite(cost)) {
+    summary.termination = "FAILURE: the initial cost is not finite";
+    return summary;
+  }
+  summary.success = true;
+
+  const auto gradient_max_norm = [&] {
+    double norm = g_camera_.size() > 0 ? g_camera_.cwiseAbs().maxCoeff() : 0.0;
+    for (size_t j = 0; j < g_point_.size(); ++j) {
+      if (!problem_.points[j].constant) norm = std::max(norm, g_point_[j].cwiseAbs().maxCoeff());
+    }
+    return norm;
+  };
+  std::ostringstream termination;
+  double radius = kInitialRadius;
+  double decrease_factor = 2.0;
+  int num_steps = 0;
+  Eigen::VectorXd camera_step;
+  std::vector<Eigen::Vector3d> point_step;
+  Parameters candidate;
+  if (gradient_max_norm() <= options_.gradient_tolerance) {
+    termination << "CONVERGENCE: gradient tolerance reached";
+  }
+  while (termination.tellp() == 0) {
+    if (num_steps >= options_.max_num_iterations) {
+      termination << "NO_CONVERGENCE: maximum number of iterations reached";
+      break;
+    }
+    ++num_steps;
+    if (!ComputeStep(radius, &camera_step, &point_step)) {
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) termination << "CONVERGENCE: minimum trust region radius reached";
+      continue;
+    }
+    const double model_cost_change = ModelCostChange(camera_step, point_step);
+    ApplyStep(camera_step, point_step, &candidate);
+    const double candidate_cost = Evaluate(candidate, /*linearize=*/false);
+
+    double step_norm_squared = camera_step.squaredNorm();
+    for (const Eigen::Vector3d& step : point_step) step_norm_squared += step.squaredNorm();
+    const double x_norm = ParameterNorm(parameters_);
+    if (std::sqrt(step_norm_squared) <=
+        options_.parameter_tolerance * (x_norm + options_.parameter_tolerance)) {
+      termination << "CONVERGENCE: parameter tolerance reached";
+      break;
+    }
+    const double cost_change = cost - candidate_cost;
+    if (std::isfinite(candidate_cost) &&
+        std::abs(cost_change) <= options_.function_tolerance * cost) {
+      termination << "CONVERGENCE: function tolerance reached (|cost change|/cost "
+                  << std::abs(cost_change) / cost << ")";
+      break;
+    }
+    const double relative_decrease = cost_change / model_cost_change;
+    if (std::isfinite(candidate_cost) && model_cost_change > 0 &&
+        relative_decrease > kMinRelativeDecrease) {
+      parameters_ = std::move(candidate);
+      cost = Evaluate(parameters_, /*linearize=*/true);
+      radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0,
+                                                      1.0 - std::pow(2.0 * relative_decrease - 1.0, 3)));
+      decrease_factor = 2.0;
+      if (gradient_max_norm() <= options_.gradient_tolerance) {
+        termination << "CONVERGENCE: gradient tolerance reached";
+      }
+    } else {
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) termination << "CONVERGENCE: minimum trust region radius reached";
+    }
+    if (options_.print_summary) {
+      PARALLAX_LOG(Debug) << "dense Schur LM: step " << num_steps << " cost " << cost
+                          << " radius " << radius;
+    }
+  }
+  CopyOut();
+  summary.final_cost = cost;
+  summary.num_iterations = num_steps;
+  summary.termination = termination.str();
+  return summary;
+}
+
+}  // namespace
+
+size_t NumReducedCameraVariables(const BundleAdjustmentProblem& problem) {
+  size_t n = 0;
+  for (const auto& pose : problem.poses) {
+    if (!pose.constant && pose.num_observations > 0) n += 6;
+  }
+  for (const auto& block : problem.cameras) {
+    if (block.num_observations > 0) n += block.free_params.size();
+  }
+  return n;
+}
+
+BundleAdjustmentSummary SolveWithDenseSchur(const BundleAdjustmentOptions& options,
+                                            const ceres::LossFunction* loss,
+                                            BundleAdjustmentProblem* problem) {
+  PARALLAX_CHECK(problem != nullptr);
+  DenseSchurSolver solver(options, loss, problem);
+  return solver.Solve();
+}
+
+}  // namespace parallax
