@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libceres-dev libsqlite3-dev sqlite3
   libopencv-core-dev libopencv-imgcodecs-dev libopencv-imgproc-dev
   libopencv-features2d-dev libopencv-calib3d-dev
+  libjpeg62-turbo-dev libpng-dev libtiff-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium

@@ -5,9 +5,10 @@
 #include <cmath>
 #include <map>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "parallax/calibration/exif.h"
+#include "parallax/feature/image_reader.h"
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
 #include "parallax/util/threading.h"
@@ -19,6 +20,21 @@ std::string SizeString(int width, int height) {
   return std::to_string(width) + "x" + std::to_string(height);
 }
 
+// The image as a viewer shows it for EXIF orientation 1-8 (rotations and mirrorings).
+cv::Mat ApplyExifOrientation(const cv::Mat& image, int orientation) {
+  cv::Mat out;
+  switch (orientation) {
+    case 2: cv::flip(image, out, 1); return out;
+    case 3: cv::rotate(image, out, cv::ROTATE_180); return out;
+    case 4: cv::flip(image, out, 0); return out;
+    case 5: cv::transpose(image, out); return out;
+    case 6: cv::rotate(image, out, cv::ROTATE_90_CLOCKWISE); return out;
+    case 7: cv::transpose(image, out); cv::rotate(out, out, cv::ROTATE_180); return out;
+    case 8: cv::rotate(image, out, cv::ROTATE_90_COUNTERCLOCKWISE); return out;
+    default: return image;
+  }
+}
+
 // 8-bit gray with EXIF orientation applied; empty when the file cannot be decoded.
 cv::Mat DecodeGray(const std::filesystem::path& path, std::string* reason) {
   std::error_code error;
@@ -28,8 +44,10 @@ cv::Mat DecodeGray(const std::filesystem::path& path, std::string* reason) {
   }
   cv::Mat gray;
   try {
-    gray = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception&) {
+    gray = ReadBitmap(path).gray;
+    const std::optional<ExifData> exif = ReadExif(path);
+    if (exif && exif->orientation) gray = ApplyExifOrientation(gray, *exif->orientation);
+  } catch (const std::exception&) {
     gray.release();
   }
   if (gray.empty()) *reason = "cannot be decoded as an image";

@@ -11,6 +11,7 @@ namespace {
 
 constexpr uint16_t kTagMake = 0x010F;
 constexpr uint16_t kTagModel = 0x0110;
+constexpr uint16_t kTagOrientation = 0x0112;
 constexpr uint16_t kTagExifIfdPointer = 0x8769;
 constexpr uint16_t kTagFocalLength = 0x920A;
 constexpr uint16_t kTagPixelXDimension = 0xA002;
@@ -197,6 +198,11 @@ bool ParseIfd(const TiffReader& reader, uint64_t ifd_offset, ExifData* exif,
         break;
       case kTagModel:
         exif->model = ReadAscii(reader, entry);
+        break;
+      case kTagOrientation:
+        if (const auto value = ReadInteger(reader, entry); value && *value >= 1 && *value <= 8) {
+          exif->orientation = static_cast<int>(*value);
+        }
         break;
       case kTagExifIfdPointer:
         if (exif_ifd_offset != nullptr && (entry.type == kTypeLong || entry.type == kTypeShort)) {

@@ -19,6 +19,7 @@ struct ExifData {
   std::optional<int> focal_plane_resolution_unit;  // 0xA210: 2 inch, 3 cm (4 mm, 5 µm)
   std::optional<int64_t> pixel_x_dimension;        // 0xA002 width the camera wrote
   std::optional<int64_t> pixel_y_dimension;        // 0xA003 height the camera wrote
+  std::optional<int> orientation;                  // 0x0112 in IFD0: 1-8, 1 is upright
 };
 
 // Parses a TIFF-structured EXIF block ("II*\0" or "MM\0*" header, IFD0, then the Exif IFD that

@@ -128,6 +128,7 @@ std::string MakeTypicalTiff(bool little_endian) {
   TiffBuilder builder(little_endian);
   builder.AddAscii(false, 0x010F, "Canon");
   builder.AddAscii(false, 0x0110, "Canon EOS 5D  ");
+  builder.AddShort(false, 0x0112, 6);  // Rotate 90 degrees clockwise to view.
   builder.AddRational(true, 0x920A, 50, 1);
   builder.AddShort(true, 0xA405, 80);
   builder.AddRational(true, 0xA20E, 3888000, 1415);
@@ -141,6 +142,7 @@ void ExpectTypicalExif(const std::optional<ExifData>& exif) {
   ASSERT_TRUE(exif.has_value());
   EXPECT_EQ(exif->make, "Canon");
   EXPECT_EQ(exif->model, "Canon EOS 5D");
+  EXPECT_EQ(exif->orientation, 6);
   ASSERT_TRUE(exif->focal_length_mm.has_value());
   EXPECT_DOUBLE_EQ(*exif->focal_length_mm, 50);
   EXPECT_EQ(exif->focal_length_35mm, 80);

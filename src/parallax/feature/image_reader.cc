@@ -1,12 +1,13 @@
 #include "parallax/feature/image_reader.h"
 
+#include "parallax/feature/image_codecs.h"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string_view>
 #include <system_error>
@@ -389,11 +390,8 @@ Bitmap DecodeBitmap(std::string_view bytes, const std::filesystem::path& source,
 
   cv::Mat decoded;
   try {
-    // imdecode does not write to its input.
-    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1,
-                         const_cast<char*>(bytes.data()));
-    decoded = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& exception) {
+    decoded = DecodeImage(bytes, format);
+  } catch (const std::exception& exception) {
     Fail(source, std::string("cannot decode ") + FormatName(format) + ": " +
                      OneLine(exception.what()));
   }

@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <iomanip>
 #include <numbers>
-#include <opencv2/imgcodecs.hpp>
 #include <ostream>
 #include <random>
 
+#include "parallax/feature/image_codecs.h"
 #include "parallax/render/procedural_texture.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -190,8 +190,7 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
     RenderOptions render_options = SyntheticSceneRenderOptions(options, static_cast<int>(i));
     render_options.num_threads = 1;
     const cv::Mat rendered = RenderView(scene, camera, image.cam_from_world, render_options);
-    std::vector<uchar> png;
-    PARALLAX_CHECK(cv::imencode(".png", rendered, png));
+    const std::string png = EncodePng(rendered);
     WriteFileAtomically(output_dir / image.name, [&png](std::ostream& stream) {
       stream.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
     }, /*binary=*/true);

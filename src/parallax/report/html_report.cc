@@ -4,11 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <tuple>
 #include <unordered_map>
 
+#include "parallax/feature/image_codecs.h"
 #include "parallax/report/html_report_assets.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -53,9 +53,12 @@ EmbeddedImage EmbedImage(const std::filesystem::path& path, const HtmlReportOpti
   EmbeddedImage embedded;
   std::error_code error;
   if (path.empty() || !std::filesystem::is_regular_file(path, error)) return embedded;
-  const cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
-  if (image.empty()) {
-    PARALLAX_LOG(Warning) << path.string() << ": cannot decode image for the report";
+  cv::Mat image;
+  try {
+    image = ReadBitmap(path).color;
+  } catch (const std::exception& exception) {
+    PARALLAX_LOG(Warning) << path.string() << ": cannot decode image for the report ("
+                          << exception.what() << ")";
     return embedded;
   }
   embedded.width = image.cols;
@@ -66,11 +69,9 @@ EmbeddedImage EmbedImage(const std::filesystem::path& path, const HtmlReportOpti
     const double factor = static_cast<double>(options.max_image_size) / longest;
     cv::resize(image, resized, cv::Size(), factor, factor, cv::INTER_AREA);
   }
-  std::vector<uint8_t> bytes;
-  if (!cv::imencode(".jpg", resized, bytes, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality})) {
-    return embedded;
-  }
-  embedded.data_url = "data:image/jpeg;base64," + Base64Encode(bytes.data(), bytes.size());
+  const std::string bytes = EncodeJpeg(resized, options.jpeg_quality);
+  embedded.data_url = "data:image/jpeg;base64," +
+                      Base64Encode(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
   return embedded;
 }
 
