@@ -133,10 +133,12 @@ const Reconstruction& TempleSizedProblem() {
   return problem;
 }
 
-// Arg: threads.
+// Args: threads, solver (0: Parallax's dense Schur LM, 1: Ceres), side by side.
 void BM_BundleAdjustmentIteration(benchmark::State& state) {
   const Reconstruction& problem = TempleSizedProblem();
   BundleAdjustmentOptions options;
+  options.solver =
+      state.range(1) == 0 ? BundleAdjustmentSolver::kDenseSchur : BundleAdjustmentSolver::kCeres;
   options.max_num_iterations = 1;
   options.num_threads = static_cast<int>(state.range(0));
   BundleAdjustmentConfig config;
@@ -156,13 +158,13 @@ void BM_BundleAdjustmentIteration(benchmark::State& state) {
   state.counters["images"] = static_cast<double>(problem.NumRegImages());
   state.counters["points"] = static_cast<double>(problem.NumPoints3D());
   state.counters["observations"] = static_cast<double>(problem.NumObservations());
+  state.SetLabel(summary.solver);
   state.counters["cost_ratio"] =
       summary.initial_cost > 0 ? summary.final_cost / summary.initial_cost : 0;
 }
 BENCHMARK(BM_BundleAdjustmentIteration)
-    ->ArgName("threads")
-    ->Arg(1)
-    ->Arg(2)
+    ->ArgNames({"threads", "ceres"})
+    ->ArgsProduct({{1, 2}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
