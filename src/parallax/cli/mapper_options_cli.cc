@@ -1,6 +1,7 @@
 #include "parallax/cli/mapper_options_cli.h"
 
 #include <iostream>
+#include <string>
 
 #include "parallax/pipeline/run_summary.h"
 
@@ -31,9 +32,19 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_flag("!--no-refine-intrinsics", mapper.refine_focal_length,
                "Keep focal lengths fixed even for cameras without a prior");
   app.add_option("--ba-threads", mapper.bundle_adjustment.num_threads,
-                 "Threads for bundle adjustment (-1: all; 1 makes runs bit-identical, since Ceres' "
-                 "threaded Schur elimination sums in arrival order)")
+                 "Threads for bundle adjustment (-1: all; 1 makes runs bit-identical also above "
+                 "150 images, where Ceres' threaded Schur elimination sums in arrival order)")
       ->capture_default_str();
+  app.add_option_function<std::string>(
+         "--ba-solver",
+         [&mapper](const std::string& name) {
+           mapper.bundle_adjustment.solver = name == "ceres"         ? BundleAdjustmentSolver::kCeres
+                                             : name == "dense-schur" ? BundleAdjustmentSolver::kDenseSchur
+                                                                     : BundleAdjustmentSolver::kAuto;
+         },
+         "auto (Parallax's dense Schur LM up to 150 images, Ceres above), dense-schur or ceres")
+      ->check(CLI::IsMember({"auto", "dense-schur", "ceres"}))
+      ->default_str("auto");
   app.add_flag("!--no-text", options->write_text, "Do not write the .txt model files");
   app.add_flag("!--no-binary", options->write_binary, "Do not write the .bin model files");
 }

@@ -466,7 +466,7 @@ class IncrementalMapper::ModelBuilder {
     PARALLAX_LOG(Debug) << "mapper: BA over " << config.images.size() << " images, "
                         << ba_summary.num_residuals << " observations: "
                         << ba_summary.num_iterations << " iterations, " << ba_summary.seconds
-                        << " s (" << ba_summary.termination << ")";
+                        << " s, " << ba_summary.solver << " (" << ba_summary.termination << ")";
   }
 
   const IncrementalMapperOptions& options_;
