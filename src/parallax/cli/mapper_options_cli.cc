@@ -33,7 +33,7 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
                "Keep focal lengths fixed even for cameras without a prior");
   app.add_option("--ba-threads", mapper.bundle_adjustment.num_threads,
                  "Threads for bundle adjustment (-1: all; 1 makes runs bit-identical also above "
-                 "150 images, where Ceres' threaded Schur elimination sums in arrival order)")
+                 "250 images, where Ceres' threaded Schur elimination sums in arrival order)")
       ->capture_default_str();
   app.add_option_function<std::string>(
          "--ba-solver",
@@ -42,7 +42,7 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
                                              : name == "dense-schur" ? BundleAdjustmentSolver::kDenseSchur
                                                                      : BundleAdjustmentSolver::kAuto;
          },
-         "auto (Parallax's dense Schur LM up to 150 images, Ceres above), dense-schur or ceres")
+         "auto (Parallax's dense Schur LM up to 250 images, Ceres above), dense-schur or ceres")
       ->check(CLI::IsMember({"auto", "dense-schur", "ceres"}))
       ->default_str("auto");
   app.add_flag("!--no-text", options->write_text, "Do not write the .txt model files");

@@ -3,7 +3,6 @@
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
-#include <optional>
 
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
@@ -13,6 +12,21 @@
 
 namespace parallax {
 namespace {
+
+// Sets OpenCV's thread count to one (when `single`) and restores it when the scope ends,
+// also when the extraction loop throws.
+class OpenCvThreadsGuard {
+ public:
+  explicit OpenCvThreadsGuard(bool single) : saved_(cv::getNumThreads()) {
+    if (single) cv::setNumThreads(1);
+  }
+  ~OpenCvThreadsGuard() { cv::setNumThreads(saved_); }
+  OpenCvThreadsGuard(const OpenCvThreadsGuard&) = delete;
+  OpenCvThreadsGuard& operator=(const OpenCvThreadsGuard&) = delete;
+
+ private:
+  const int saved_;
+};
 
 // One image to extract: its file, database name and row (when the row exists already but
 // its features do not, e.g. a database prepared by another tool).
@@ -151,22 +165,21 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
   // Images are extracted in parallel, so OpenCV's own threads inside SIFT only compete with
   // ours, and its pool busy-waits after each call, which slowed the mapping stage that
   // follows by ~10 % on templeRing. One OpenCV thread while there is an image per worker.
-  const int opencv_threads = cv::getNumThreads();
-  if (jobs.size() >= static_cast<size_t>(EffectiveNumThreads(options.num_threads))) {
-    cv::setNumThreads(1);
+  {
+    const OpenCvThreadsGuard opencv_threads(
+        /*single=*/jobs.size() >= static_cast<size_t>(EffectiveNumThreads(options.num_threads)));
+    ParallelFor(0, jobs.size(), options.num_threads, [&](size_t index) {
+      auto result = std::make_unique<ExtractionResult>(ExtractImage(jobs[index], options));
+      std::lock_guard<std::mutex> lock(mutex);
+      results[index] = std::move(result);
+      while (next_to_write < jobs.size() && results[next_to_write] != nullptr) {
+        write_result(next_to_write);
+        results[next_to_write].reset(new ExtractionResult());  // Free the features, keep "done".
+        ++next_to_write;
+      }
+      progress.Increment();
+    });
   }
-  ParallelFor(0, jobs.size(), options.num_threads, [&](size_t index) {
-    auto result = std::make_unique<ExtractionResult>(ExtractImage(jobs[index], options));
-    std::lock_guard<std::mutex> lock(mutex);
-    results[index] = std::move(result);
-    while (next_to_write < jobs.size() && results[next_to_write] != nullptr) {
-      write_result(next_to_write);
-      results[next_to_write].reset(new ExtractionResult());  // Free the features, keep "done".
-      ++next_to_write;
-    }
-    progress.Increment();
-  });
-  cv::setNumThreads(opencv_threads);
   progress.Finish();
 
   stats.mean_num_keypoints =
