@@ -36,6 +36,20 @@ using ProjectFn = void (*)(const double*, const Eigen::Vector3d&, Eigen::Vector2
                            double*);
 using ImgFromCamFn = void (*)(const double*, double, double, double, double*, double*);
 
+// 0.5 rho(s) of one observation's squared residual s, and in *scale (when non-null) the
+// factor sqrt(rho'(s)) that Ceres' corrector applies to residual and Jacobian for losses with
+// rho'' <= 0. A null loss is the squared loss.
+double HalfRobustCost(const ceres::LossFunction* loss, double squared_norm, double* scale) {
+  if (loss == nullptr) {
+    if (scale != nullptr) *scale = 1.0;
+    return 0.5 * squared_norm;
+  }
+  double rho[3];
+  loss->Evaluate(squared_norm, rho);
+  if (scale != nullptr) *scale = std::sqrt(std::max(rho[1], 0.0));
+  return 0.5 * rho[0];
+}
+
 // The solver's copy of the variables: the problem's blocks are written only at the end.
 struct Parameters {
   std::vector<Eigen::Quaterniond> rotations;
@@ -232,15 +246,8 @@ double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) 
         if (!linearize) {
           double x, y;
           img_from_cam_[c](params, point_in_cam.x(), point_in_cam.y(), point_in_cam.z(), &x, &y);
-          const double squared_norm =
-              (Eigen::Vector2d(x, y) - observation.xy).squaredNorm();
-          if (loss_ == nullptr) {
-            cost += 0.5 * squared_norm;
-          } else {
-            double rho[3];
-            loss_->Evaluate(squared_norm, rho);
-            cost += 0.5 * rho[0];
-          }
+          cost += HalfRobustCost(loss_, (Eigen::Vector2d(x, y) - observation.xy).squaredNorm(),
+                                 nullptr);
           continue;
         }
         ObservationJacobian& jacobian = jacobians_[k];
@@ -273,15 +280,9 @@ double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) 
                 d_img_d_params[num_params + free[f]];
           }
         }
-        // Ceres' corrector for rho'' <= 0: residual and Jacobian times sqrt(rho').
-        const double squared_norm = jacobian.residual.squaredNorm();
-        if (loss_ == nullptr) {
-          cost += 0.5 * squared_norm;
-        } else {
-          double rho[3];
-          loss_->Evaluate(squared_norm, rho);
-          cost += 0.5 * rho[0];
-          const double scale = std::sqrt(std::max(rho[1], 0.0));
+        double scale = 1.0;
+        cost += HalfRobustCost(loss_, jacobian.residual.squaredNorm(), &scale);
+        if (loss_ != nullptr) {
           jacobian.residual *= scale;
           jacobian.pose *= scale;
           jacobian.point *= scale;
