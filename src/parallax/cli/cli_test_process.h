@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "parallax/util/file.h"
+#include "parallax/util/test_dir.h"
 
 extern char** environ;
 
@@ -141,29 +142,6 @@ inline ProcessResult RunParallax(const std::vector<std::string>& arguments, cons
   ChildProcess child(argv, dir / "stdout.txt", dir / "stderr.txt");
   return child.Wait(timeout_seconds);
 }
-
-// A fresh folder under the system temp folder named after the running test, removed by the
-// destructor.
-class ScopedTestDir {
- public:
-  explicit ScopedTestDir(const std::string& prefix) {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / (prefix + "_" + std::to_string(getpid()) + "_" +
-                                         (info != nullptr ? info->name() : "suite"));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~ScopedTestDir() {
-    std::error_code error;
-    fs::remove_all(path_, error);
-  }
-  ScopedTestDir(const ScopedTestDir&) = delete;
-  ScopedTestDir& operator=(const ScopedTestDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 // Renders a small synthetic scene with `parallax synth` (images view_0001.png..., K.txt,
 // synth_par.txt, gt/) and fails the test when it cannot.

@@ -13,6 +13,7 @@
 #include "parallax/math/random.h"
 #include "parallax/scene/database.h"
 #include "parallax/util/file.h"
+#include "parallax/util/test_dir.h"
 
 namespace parallax {
 namespace {
@@ -31,14 +32,7 @@ class FeaturesMatchCommandTest : public ::testing::Test {
     const char* binary = std::getenv("PARALLAX_BINARY");
     if (binary == nullptr || !fs::exists(binary)) GTEST_SKIP() << "PARALLAX_BINARY not set";
     binary_ = binary;
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("parallax_features_match_test_" + std::to_string(getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
     fs::create_directories(dir_ / "images");
-  }
-  void TearDown() override {
-    if (!dir_.empty()) fs::remove_all(dir_);
   }
 
   CommandResult Run(const std::string& arguments) {
@@ -54,7 +48,8 @@ class FeaturesMatchCommandTest : public ::testing::Test {
   }
 
   std::string binary_;
-  fs::path dir_;
+  const test::ScopedTestDir scoped_dir_{"parallax_features_match_test"};
+  const fs::path dir_ = scoped_dir_.path();
 };
 
 // A textured image and views of it under small homographies: matchable, with exact geometry.

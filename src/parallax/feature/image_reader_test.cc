@@ -9,6 +9,7 @@
 
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
+#include "parallax/util/test_dir.h"
 
 namespace parallax {
 namespace {
@@ -17,14 +18,6 @@ namespace fs = std::filesystem;
 
 class ImageReaderTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("parallax_image_reader_" + std::to_string(getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   // A colour image with structure in every channel, so channel swaps would show.
   static cv::Mat TestImage(int width, int height, int type = CV_8UC3) {
@@ -81,7 +74,8 @@ class ImageReaderTest : public ::testing::Test {
     return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
   }
 
-  fs::path dir_;
+  const test::ScopedTestDir scoped_dir_{"parallax_image_reader"};
+  const fs::path dir_ = scoped_dir_.path();
 };
 
 TEST_F(ImageReaderTest, DetectsFormatAndSizeOfEachFormat) {

@@ -10,6 +10,7 @@
 #include "parallax/calibration/camera_json.h"
 #include "parallax/calibration/exif.h"
 #include "parallax/util/check.h"
+#include "parallax/util/test_dir.h"
 
 namespace parallax {
 namespace {
@@ -18,20 +19,13 @@ namespace fs = std::filesystem;
 
 class CameraSetupTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("parallax_camera_setup_test_" + std::to_string(getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   fs::path WriteText(const std::string& name, const std::string& text) {
     const fs::path path = dir_ / name;
     std::ofstream(path, std::ios::binary) << text;
     return path;
   }
-  fs::path dir_;
+  const test::ScopedTestDir scoped_dir_{"parallax_camera_setup_test"};
+  const fs::path dir_ = scoped_dir_.path();
 };
 
 // The EXIF fields a camera writes about its focal length, for a hand-made APP1 segment.

@@ -9,6 +9,7 @@
 
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
+#include "parallax/util/test_dir.h"
 
 namespace parallax {
 namespace {
@@ -32,18 +33,14 @@ cv::Mat TexturedImage(int width, int height) {
 class FeatureExtractionTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("parallax_feature_extraction_test_" + std::to_string(getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
     images_ = dir_ / "images";
     fs::create_directories(images_);
   }
-  void TearDown() override { fs::remove_all(dir_); }
   void WriteImage(const std::string& name, int width, int height) {
     ASSERT_TRUE(cv::imwrite((images_ / name).string(), TexturedImage(width, height)));
   }
-  fs::path dir_;
+  const test::ScopedTestDir scoped_dir_{"parallax_feature_extraction_test"};
+  const fs::path dir_ = scoped_dir_.path();
   fs::path images_;
 };
 

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "parallax/math/random.h"
+#include "parallax/util/test_dir.h"
 
 namespace parallax {
 namespace {
@@ -18,14 +19,6 @@ namespace fs = std::filesystem;
 // descriptor, plus `num_clutter` keypoints with random descriptors.
 class FeatureMatchingTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("parallax_feature_matching_test_" + std::to_string(getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   void MakeScene(Database* database, int num_images, int num_points, int num_clutter) {
     std::vector<Eigen::Vector3d> points(num_points);
@@ -84,7 +77,8 @@ class FeatureMatchingTest : public ::testing::Test {
     return point1 >= 0 && point1 == point_of_keypoint_.at(image_id2).at(match.point2D_idx2);
   }
 
-  fs::path dir_;
+  const test::ScopedTestDir scoped_dir_{"parallax_feature_matching_test"};
+  const fs::path dir_ = scoped_dir_.path();
   std::vector<std::vector<int>> point_of_keypoint_;
 };
 

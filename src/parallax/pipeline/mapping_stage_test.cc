@@ -7,6 +7,7 @@
 
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/file.h"
+#include "parallax/util/test_dir.h"
 
 namespace parallax {
 namespace {
@@ -15,14 +16,6 @@ namespace fs = std::filesystem;
 
 class MappingStageTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("parallax_mapping_stage_test_" + std::to_string(getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   // Two registered images of one camera with `num_points` points seen by both, each at the
   // same pixel (x = index) in both images.
@@ -50,7 +43,8 @@ class MappingStageTest : public ::testing::Test {
     return model;
   }
 
-  fs::path dir_;
+  const test::ScopedTestDir scoped_dir_{"parallax_mapping_stage_test"};
+  const fs::path dir_ = scoped_dir_.path();
 };
 
 TEST_F(MappingStageTest, ColoursAreTheMeanOfTheObservations) {

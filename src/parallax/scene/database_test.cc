@@ -14,6 +14,7 @@
 
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
+#include "parallax/util/test_dir.h"
 
 namespace parallax {
 namespace {
@@ -24,16 +25,11 @@ namespace fs = std::filesystem;
 class DatabaseTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("parallax_database_test_" + std::to_string(getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     path_ = dir_ / "database.db";
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
-  fs::path dir_;
+  const test::ScopedTestDir scoped_dir_{"parallax_database_test"};
+  const fs::path dir_ = scoped_dir_.path();
   fs::path path_;
 };
 
