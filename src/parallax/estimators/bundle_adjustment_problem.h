@@ -20,6 +20,8 @@ struct BundleAdjustmentProblem {
     bool constant = false;
     std::array<bool, 3> constant_translation = {false, false, false};  // Gauge coordinates.
     size_t num_observations = 0;
+    // Part of the reduced camera system: refined and observed.
+    bool IsVariable() const { return !constant && num_observations > 0; }
   };
   struct Point {
     Eigen::Vector3d* xyz = nullptr;
@@ -29,6 +31,7 @@ struct BundleAdjustmentProblem {
     Camera* camera = nullptr;
     std::vector<int> free_params;  // Refined parameter indices, ascending; empty: constant.
     size_t num_observations = 0;
+    bool IsVariable() const { return !free_params.empty() && num_observations > 0; }
   };
   struct Observation {
     int pose = 0;    // Indices into poses, points, cameras.

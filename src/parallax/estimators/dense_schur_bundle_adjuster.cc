@@ -60,7 +60,8 @@ struct Parameters {
 
 // One observation's (loss-corrected) residual and Jacobians at the current parameters:
 // pose columns are the rotation increment (left-multiplied rotation vector), then the
-// translation; camera columns are the free intrinsics in order.
+// translation. The intrinsics' Jacobian (free parameters in order) is kept apart, in
+// camera_jacobians_, since most adjustments hold the cameras fixed.
 struct ObservationJacobian {
   Eigen::Vector2d residual;
   Matrix26 pose;
@@ -90,6 +91,9 @@ class DenseSchurSolver {
                    std::vector<Eigen::Vector3d>* point_step);
   double ModelCostChange(const Eigen::VectorXd& camera_step,
                          const std::vector<Eigen::Vector3d>& point_step) const;
+  // J_c dc of the k-th observation (in observation_order_): its pose and intrinsics part of
+  // the linearised residual change for the reduced-system step `camera_step`.
+  Eigen::Vector2d CameraStepImage(size_t k, const Eigen::VectorXd& camera_step) const;
   void ApplyStep(const Eigen::VectorXd& camera_step, const std::vector<Eigen::Vector3d>& point_step,
                  Parameters* candidate) const;
   double ParameterNorm(const Parameters& parameters) const;
@@ -122,8 +126,9 @@ class DenseSchurSolver {
   std::vector<Eigen::Matrix3d> v_;
   std::vector<Eigen::Vector3d> g_point_;
   std::vector<Eigen::Matrix3d> v_inverse_;  // Damped, from the last ComputeStep.
-  std::vector<Eigen::MatrixXd> partial_s_;
-  std::vector<Eigen::VectorXd> partial_b_;
+  // Per-chunk accumulators: U and g_c while linearising, then S and b while solving.
+  std::vector<Eigen::MatrixXd> partial_matrix_;
+  std::vector<Eigen::VectorXd> partial_vector_;
 };
 
 void DenseSchurSolver::Layout() {
@@ -132,7 +137,7 @@ void DenseSchurSolver::Layout() {
   pose_offset_.assign(num_poses, -1);
   for (size_t i = 0; i < num_poses; ++i) {
     const auto& pose = problem_.poses[i];
-    if (pose.constant || pose.num_observations == 0) continue;
+    if (!pose.IsVariable()) continue;
     pose_offset_[i] = num_camera_variables_;
     num_camera_variables_ += 6;
   }
@@ -151,7 +156,7 @@ void DenseSchurSolver::Layout() {
       return &Model::template ImgFromCam<double>;
     });
     PARALLAX_CHECK_LE(block.camera->params.size(), static_cast<size_t>(kMaxCameraParams));
-    if (block.free_params.empty() || block.num_observations == 0) continue;
+    if (!block.IsVariable()) continue;
     camera_offset_[c] = num_camera_variables_;
     camera_dim_[c] = static_cast<int>(block.free_params.size());
     num_camera_variables_ += camera_dim_[c];
@@ -188,8 +193,8 @@ void DenseSchurSolver::Layout() {
   v_.resize(num_points);
   g_point_.resize(num_points);
   v_inverse_.resize(num_points);
-  partial_s_.assign(NumChunks(), Eigen::MatrixXd());
-  partial_b_.assign(NumChunks(), Eigen::VectorXd());
+  partial_matrix_.assign(NumChunks(), Eigen::MatrixXd());
+  partial_vector_.assign(NumChunks(), Eigen::VectorXd());
 }
 
 void DenseSchurSolver::CopyIn() {
@@ -226,8 +231,8 @@ double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) 
     Eigen::MatrixXd* u = nullptr;
     Eigen::VectorXd* g = nullptr;
     if (linearize) {
-      u = &partial_s_[chunk];
-      g = &partial_b_[chunk];
+      u = &partial_matrix_[chunk];
+      g = &partial_vector_[chunk];
       u->setZero(n, n);
       g->setZero(n);
     }
@@ -320,11 +325,11 @@ double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) 
     chunk_cost[chunk] = cost;
   });
   if (linearize) {
-    u_ = partial_s_[0];
-    g_camera_ = partial_b_[0];
+    u_ = partial_matrix_[0];
+    g_camera_ = partial_vector_[0];
     for (int chunk = 1; chunk < NumChunks(); ++chunk) {
-      u_ += partial_s_[chunk];
-      g_camera_ += partial_b_[chunk];
+      u_ += partial_matrix_[chunk];
+      g_camera_ += partial_vector_[chunk];
     }
   }
   double cost = 0;
@@ -341,8 +346,8 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
   // Per chunk: S_chunk = -sum_j W_j V_j^-1 W_j^T and b_chunk = sum_j W_j V_j^-1 g_j over its
   // points, lower triangle only; W_j's rows are the pose and camera blocks of j's views.
   ParallelFor(0, static_cast<size_t>(NumChunks()), num_threads_, [&](size_t chunk) {
-    Eigen::MatrixXd& s = partial_s_[chunk];
-    Eigen::VectorXd& b = partial_b_[chunk];
+    Eigen::MatrixXd& s = partial_matrix_[chunk];
+    Eigen::VectorXd& b = partial_vector_[chunk];
     s.setZero(n, n);
     b.setZero(n);
     std::vector<Matrix63> w_pose, y_pose;
@@ -442,8 +447,8 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
   Eigen::MatrixXd s = u_;
   Eigen::VectorXd b = -g_camera_;
   for (int chunk = 0; chunk < NumChunks(); ++chunk) {
-    s += partial_s_[chunk];
-    b += partial_b_[chunk];
+    s += partial_matrix_[chunk];
+    b += partial_vector_[chunk];
   }
   for (int d = 0; d < n; ++d) s(d, d) += damping(u_(d, d));
   camera_step->setZero(n);
@@ -461,22 +466,26 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
       if (problem_.points[j].constant) continue;
       Eigen::Vector3d rhs = g_point_[j];
       for (size_t k = point_begin_[j]; k < point_begin_[j + 1]; ++k) {
-        const auto& observation = problem_.observations[observation_order_[k]];
-        const ObservationJacobian& jacobian = jacobians_[k];
-        Eigen::Vector2d j_step = Eigen::Vector2d::Zero();
-        const int pose_offset = pose_offset_[observation.pose];
-        if (pose_offset >= 0) j_step += jacobian.pose * camera_step->segment<6>(pose_offset);
-        const int c = observation.camera;
-        if (camera_offset_[c] >= 0) {
-          j_step += camera_jacobians_[k].leftCols(camera_dim_[c]) *
-                    camera_step->segment(camera_offset_[c], camera_dim_[c]);
-        }
-        rhs.noalias() += jacobian.point.transpose() * j_step;
+        rhs.noalias() += jacobians_[k].point.transpose() * CameraStepImage(k, *camera_step);
       }
       (*point_step)[j] = -v_inverse_[j] * rhs;
     }
   });
   return true;
+}
+
+Eigen::Vector2d DenseSchurSolver::CameraStepImage(size_t k,
+                                                  const Eigen::VectorXd& camera_step) const {
+  const auto& observation = problem_.observations[observation_order_[k]];
+  Eigen::Vector2d image = Eigen::Vector2d::Zero();
+  const int pose_offset = pose_offset_[observation.pose];
+  if (pose_offset >= 0) image += jacobians_[k].pose * camera_step.segment<6>(pose_offset);
+  const int c = observation.camera;
+  if (camera_offset_[c] >= 0) {
+    image += camera_jacobians_[k].leftCols(camera_dim_[c]) *
+             camera_step.segment(camera_offset_[c], camera_dim_[c]);
+  }
+  return image;
 }
 
 // Ceres' model cost change of the linearised, loss-corrected residuals: -(J d)^T (r + J d / 2).
@@ -486,14 +495,8 @@ double DenseSchurSolver::ModelCostChange(const Eigen::VectorXd& camera_step,
   for (size_t k = 0; k < observation_order_.size(); ++k) {
     const auto& observation = problem_.observations[observation_order_[k]];
     const ObservationJacobian& jacobian = jacobians_[k];
-    Eigen::Vector2d j_step = jacobian.point * point_step[observation.point];
-    const int pose_offset = pose_offset_[observation.pose];
-    if (pose_offset >= 0) j_step += jacobian.pose * camera_step.segment<6>(pose_offset);
-    const int c = observation.camera;
-    if (camera_offset_[c] >= 0) {
-      j_step += camera_jacobians_[k].leftCols(camera_dim_[c]) *
-                camera_step.segment(camera_offset_[c], camera_dim_[c]);
-    }
+    const Eigen::Vector2d j_step =
+        jacobian.point * point_step[observation.point] + CameraStepImage(k, camera_step);
     change -= j_step.dot(jacobian.residual + 0.5 * j_step);
   }
   return change;
@@ -638,10 +641,10 @@ BundleAdjustmentSummary DenseSchurSolver::Solve() {
 size_t NumReducedCameraVariables(const BundleAdjustmentProblem& problem) {
   size_t n = 0;
   for (const auto& pose : problem.poses) {
-    if (!pose.constant && pose.num_observations > 0) n += 6;
+    if (pose.IsVariable()) n += 6;
   }
   for (const auto& block : problem.cameras) {
-    if (block.num_observations > 0) n += block.free_params.size();
+    if (block.IsVariable()) n += block.free_params.size();
   }
   return n;
 }
