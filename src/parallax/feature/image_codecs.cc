@@ -19,6 +19,8 @@
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
 
+#include "parallax/util/byte_order.h"
+
 namespace parallax {
 namespace {
 
@@ -249,28 +251,18 @@ cv::Mat DecodeTiff(std::string_view bytes) {
 
 // ---- BMP -----------------------------------------------------------------------------
 
-uint32_t Le32(std::string_view bytes, size_t offset) {
-  uint32_t value = 0;
-  for (int i = 3; i >= 0; --i) value = (value << 8) | static_cast<uint8_t>(bytes[offset + i]);
-  return value;
-}
-
-uint16_t Le16(std::string_view bytes, size_t offset) {
-  return static_cast<uint16_t>(static_cast<uint8_t>(bytes[offset]) |
-                               (static_cast<uint8_t>(bytes[offset + 1]) << 8));
-}
-
 // Uncompressed Windows bitmaps of 8 (palette), 24 and 32 bits, what encoders write; a gray
 // palette gives one channel, as imdecode does.
 cv::Mat DecodeBmp(std::string_view bytes) {
   if (bytes.size() < 54) Throw("BMP header truncated");
-  const uint32_t data_offset = Le32(bytes, 10);
-  const uint32_t header_size = Le32(bytes, 14);
+  const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
+  const uint32_t data_offset = LittleEndian32(data + 10);
+  const uint32_t header_size = LittleEndian32(data + 14);
   if (header_size < 40) Throw("unsupported BMP header version");
-  const int32_t width = static_cast<int32_t>(Le32(bytes, 18));
-  const int32_t signed_height = static_cast<int32_t>(Le32(bytes, 22));
-  const uint16_t bits = Le16(bytes, 28);
-  const uint32_t compression = Le32(bytes, 30);
+  const int32_t width = static_cast<int32_t>(LittleEndian32(data + 18));
+  const int32_t signed_height = static_cast<int32_t>(LittleEndian32(data + 22));
+  const uint32_t bits = LittleEndian16(data + 28);
+  const uint32_t compression = LittleEndian32(data + 30);
   if (width <= 0 || signed_height == 0 || signed_height == INT32_MIN) Throw("bad BMP size");
   const bool bottom_up = signed_height > 0;
   const int height = bottom_up ? signed_height : -signed_height;
@@ -282,13 +274,13 @@ cv::Mat DecodeBmp(std::string_view bytes) {
     Throw("unsupported BMP bit depth " + std::to_string(bits));
   }
   const size_t row_bytes = ((static_cast<size_t>(width) * bits + 31) / 32) * 4;
-  if (data_offset > bytes.size() || row_bytes * static_cast<size_t>(height) > bytes.size() - data_offset) {
+  // Division, not multiplication: a header may claim sizes whose product overflows.
+  if (data_offset > bytes.size() || row_bytes > (bytes.size() - data_offset) / static_cast<size_t>(height)) {
     Throw("BMP pixel data truncated");
   }
   const auto row = [&](int y) {
     const int stored = bottom_up ? height - 1 - y : y;
-    return reinterpret_cast<const uint8_t*>(bytes.data() + data_offset +
-                                            row_bytes * static_cast<size_t>(stored));
+    return data + data_offset + row_bytes * static_cast<size_t>(stored);
   };
   if (bits == 24 || bits == 32) {
     cv::Mat image(height, width, bits == 24 ? CV_8UC3 : CV_8UC4);
@@ -297,14 +289,14 @@ cv::Mat DecodeBmp(std::string_view bytes) {
     }
     return image;
   }
-  uint32_t num_colors = Le32(bytes, 46);
+  uint32_t num_colors = LittleEndian32(data + 46);
   if (num_colors == 0 || num_colors > 256) num_colors = 256;
   const size_t palette_offset = 14 + header_size;
   if (palette_offset + 4 * num_colors > data_offset) Throw("BMP palette truncated");
   std::vector<cv::Vec3b> palette(256, cv::Vec3b(0, 0, 0));
   bool gray = true;
   for (uint32_t i = 0; i < num_colors; ++i) {
-    const auto* entry = reinterpret_cast<const uint8_t*>(bytes.data() + palette_offset + 4 * i);
+    const auto* entry = data + palette_offset + 4 * i;
     palette[i] = cv::Vec3b(entry[0], entry[1], entry[2]);
     gray = gray && entry[0] == entry[1] && entry[1] == entry[2];
   }

@@ -1,6 +1,7 @@
 #include "parallax/feature/image_reader.h"
 
 #include "parallax/feature/image_codecs.h"
+#include "parallax/util/byte_order.h"
 
 #include <algorithm>
 #include <array>
@@ -54,17 +55,6 @@ class MemoryByteSource : public ByteSource {
  private:
   std::string_view data_;
 };
-
-uint32_t BigEndian16(const uint8_t* bytes) { return (uint32_t{bytes[0]} << 8) | bytes[1]; }
-uint32_t BigEndian32(const uint8_t* bytes) {
-  return (uint32_t{bytes[0]} << 24) | (uint32_t{bytes[1]} << 16) | (uint32_t{bytes[2]} << 8) |
-         bytes[3];
-}
-uint32_t LittleEndian16(const uint8_t* bytes) { return (uint32_t{bytes[1]} << 8) | bytes[0]; }
-uint32_t LittleEndian32(const uint8_t* bytes) {
-  return (uint32_t{bytes[3]} << 24) | (uint32_t{bytes[2]} << 16) | (uint32_t{bytes[1]} << 8) |
-         bytes[0];
-}
 
 ImageFormat DetectFormat(ByteSource& source) {
   std::array<uint8_t, 8> magic{};

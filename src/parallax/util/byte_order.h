@@ -1,0 +1,21 @@
+#pragma once
+
+#include <cstdint>
+
+namespace parallax {
+
+// Unsigned integers stored in a given byte order, read from unaligned bytes.
+inline uint32_t BigEndian16(const uint8_t* bytes) { return (uint32_t{bytes[0]} << 8) | bytes[1]; }
+inline uint32_t BigEndian32(const uint8_t* bytes) {
+  return (uint32_t{bytes[0]} << 24) | (uint32_t{bytes[1]} << 16) | (uint32_t{bytes[2]} << 8) |
+         bytes[3];
+}
+inline uint32_t LittleEndian16(const uint8_t* bytes) {
+  return (uint32_t{bytes[1]} << 8) | bytes[0];
+}
+inline uint32_t LittleEndian32(const uint8_t* bytes) {
+  return (uint32_t{bytes[3]} << 24) | (uint32_t{bytes[2]} << 16) | (uint32_t{bytes[1]} << 8) |
+         bytes[0];
+}
+
+}  // namespace parallax
