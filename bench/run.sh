@@ -25,22 +25,14 @@
 # installs it and COLMAP).
 set -euo pipefail
 
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+bench_name=run.sh
+source "$(dirname "${BASH_SOURCE[0]}")/bench_common.sh"
 data="${PARALLAX_DATA:-$repo/../shared/data}"
 threads="${BENCH_THREADS:-$(nproc)}"
 out="${BENCH_OUT:-/tmp/parallax-bench-$(date +%Y%m%d-%H%M%S)}"
 datasets=("$@")
 [[ ${#datasets[@]} -eq 0 ]] && datasets=(templeRing fountain-P11)
 
-binary="${PARALLAX_BINARY:-}"
-if [[ -z "$binary" ]]; then
-  for candidate in "$repo"/build/parallax "$repo"/build-*/parallax; do
-    if [[ -x "$candidate" ]]; then binary="$candidate"; break; fi
-  done
-fi
-[[ -x "$binary" ]] || { echo "run.sh: no parallax binary (set PARALLAX_BINARY)" >&2; exit 1; }
-[[ -x /usr/bin/time ]] || {
-  echo "run.sh: /usr/bin/time missing: PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh" >&2; exit 1; }
 use_colmap=0
 if [[ "${BENCH_NO_COLMAP:-0}" != "1" ]] && command -v colmap >/dev/null; then use_colmap=1; fi
 

@@ -5,19 +5,17 @@
 #
 #   bench/scaling.sh [N...]          # default: 100 250 500
 #
-# Environment: PARALLAX_BINARY (default build/parallax), BENCH_OUT (default
+# Environment: PARALLAX_BINARY (default build/parallax, then build-*/parallax), BENCH_OUT (default
 # /tmp/parallax-scaling-YYYYmmdd-HHMMSS), BENCH_OVERLAP (sequential neighbours, default 10).
 # Needs GNU time (/usr/bin/time; PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh installs it).
 set -euo pipefail
 
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-binary="${PARALLAX_BINARY:-$repo/build/parallax}"
+bench_name=scaling.sh
+source "$(dirname "${BASH_SOURCE[0]}")/bench_common.sh"
 out="${BENCH_OUT:-/tmp/parallax-scaling-$(date +%Y%m%d-%H%M%S)}"
 overlap="${BENCH_OVERLAP:-10}"
 counts=("$@")
 [[ ${#counts[@]} -eq 0 ]] && counts=(100 250 500)
-[[ -x "$binary" ]] || { echo "scaling.sh: no parallax binary at $binary" >&2; exit 1; }
-[[ -x /usr/bin/time ]] || { echo "scaling.sh: /usr/bin/time missing" >&2; exit 1; }
 mkdir -p "$out"
 
 # seconds and peak MiB from a `/usr/bin/time -f "%e %M"` file.
