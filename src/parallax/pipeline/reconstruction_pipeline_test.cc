@@ -7,6 +7,7 @@
 #include "parallax/render/synthetic_scene.h"
 #include "parallax/report/evaluation.h"
 #include "parallax/report/ground_truth.h"
+#include "parallax/util/content_hash.h"
 #include "parallax/util/file.h"
 
 namespace parallax {
@@ -72,17 +73,43 @@ class TempleRingTest : public ::testing::Test {
   EvaluationMetrics metrics_;
 };
 
-// With the ground-truth K: registration and accuracy against the ground truth.
+// The digests of the templeRing model the default build writes, as `xxh128sum` prints them
+// ("DIGEST  FILE" lines). The default build computes the same bits on every x86-64-v3 machine
+// (issue 23, docs/portable-build.md), and each rank of an MPI run must; any change that moves
+// a bit of this model updates the file, and says why in its commit.
+const char kTempleRingModelDigests[] = PARALLAX_SOURCE_DIR
+    "/src/parallax/pipeline/testdata/templering_known_k_model.xxh128";
+
+// With the ground-truth K: registration and accuracy against the ground truth, and the model's
+// bytes against the checked-in digests.
 TEST_F(TempleRingTest, KnownIntrinsics) {
   std::ofstream(dir_ / "K.txt") << truth_.images.front().camera.CalibrationMatrix() << "\n";
   ReconstructionPipelineOptions options;
   options.extraction.camera.intrinsics_path = dir_ / "K.txt";
+  // The bytes depend on the number of BA threads (each sums its own partial system), not on
+  // the machine: fix every thread count.
+  options.extraction.num_threads = 2;
+  options.matching.num_threads = 2;
+  options.mapping.mapper.bundle_adjustment.num_threads = 2;
   ASSERT_NO_FATAL_FAILURE(Reconstruct(options));
   EXPECT_EQ(model_.NumRegImages(), 47u);
   EXPECT_LE(metrics_.center_error.median, 0.0013);  // Metres.
   EXPECT_LE(metrics_.rotation_error_deg.median, 0.2);
   EXPECT_LE(metrics_.mean_reprojection_error_px, 0.5);
   EXPECT_GE(model_.NumPoints3D(), 7500u);  // COLMAP 3.8: 7,649 on the same images.
+
+  std::string digests;
+  for (const char* file : {"cameras.bin", "images.bin", "points3D.bin"}) {
+    digests += HashFile(dir_ / "out" / "sparse" / "0" / file) + "  " + file + "\n";
+  }
+  std::cout << "model digests:\n" << digests;
+#if PARALLAX_REFERENCE_BUILD
+  EXPECT_EQ(digests, ReadFileToString(kTempleRingModelDigests))
+      << "the templeRing model's bytes changed; if on purpose, update " << kTempleRingModelDigests;
+#else
+  std::cout << "not compared with " << kTempleRingModelDigests
+            << ": this is not the default build (x86-64-v3, GCC 12.2)\n";
+#endif
 }
 
 // With no intrinsics at all (issue 5): the focal length starts from the prior of
