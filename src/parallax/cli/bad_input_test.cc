@@ -369,10 +369,12 @@ TEST_F(BadInputTest, UnwritableOutputFolderFailsWithOneLine) {
     fs::create_directories(parent);
     fs::permissions(parent, fs::perms::owner_read | fs::perms::owner_exec);
   }
-  // The output folder exists but is read-only: the database cannot be created.
+  // The output folder exists but is read-only: the run's lock file, the first thing it
+  // writes there, cannot be created.
   const ProcessResult existing =
       Run({"reconstruct", "--images", images_.string(), "--output", parent.string()});
-  ExpectFailsWithOneLineError(existing, (parent / "database.db").string(), "cannot open database");
+  ExpectFailsWithOneLineError(existing, (parent / ".parallax.lock").string(),
+                              "cannot create the lock file");
   // It does not exist and cannot be created.
   const fs::path out = parent / "parallax_out";
   const ProcessResult missing =

@@ -1,10 +1,12 @@
 #include "parallax/cli/cli_common.h"
 
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <string>
 
 #include "parallax/util/file.h"
+#include "parallax/util/interrupt.h"
 #include "parallax/util/logging.h"
 
 namespace parallax::cli {
@@ -23,8 +25,15 @@ int RunCommand(CLI::App& app, int argc, char** argv, const VerbosityFlags& flags
   }
   if (flags.quiet) SetLogLevel(LogLevel::kWarning);
   if (flags.verbose) SetLogLevel(LogLevel::kDebug);
+  // Ctrl-C and kill stop the run at its next safe point (util/interrupt.h).
+  InstallInterruptHandlers();
   try {
     return body();
+  } catch (const Interrupted& interrupted) {
+    std::cerr << "interrupted (" << (interrupted.signal_number() == SIGINT ? "SIGINT" : "SIGTERM")
+              << "): " << interrupted.what() << "; run the same command again to resume"
+              << std::endl;
+    return interrupted.ExitStatus();
   } catch (const std::exception& error) {
     // Some libraries' messages (OpenCV's, SQLite's) span lines; the user gets one.
     std::string message = error.what();

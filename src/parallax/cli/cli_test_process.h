@@ -143,6 +143,17 @@ inline ProcessResult RunParallax(const std::vector<std::string>& arguments, cons
   return child.Wait(timeout_seconds);
 }
 
+// Runs `parallax <arguments>` through /bin/sh after the shell commands `shell_prefix` (such
+// as "ulimit -f 400"), which apply to it alone.
+inline ProcessResult RunParallaxAfter(const std::string& shell_prefix,
+                                      const std::vector<std::string>& arguments,
+                                      const fs::path& dir, double timeout_seconds = 300) {
+  std::string command = shell_prefix + "; exec '" + ParallaxBinary() + "'";
+  for (const std::string& argument : arguments) command += " '" + argument + "'";
+  ChildProcess child({"/bin/sh", "-c", command}, dir / "stdout.txt", dir / "stderr.txt");
+  return child.Wait(timeout_seconds);
+}
+
 // Renders a small synthetic scene with `parallax synth` (images view_0001.png..., K.txt,
 // synth_par.txt, gt/) and fails the test when it cannot.
 // `layout`: ring (neighbours 360/num_views degrees apart) or sequence (a walk past temples,

@@ -5,6 +5,7 @@
 #include "parallax/cli/pipeline_options_cli.h"
 #include "parallax/pipeline/feature_extraction.h"
 #include "parallax/util/check.h"
+#include "parallax/util/run_lock.h"
 
 namespace parallax::cli {
 
@@ -25,6 +26,7 @@ int RunFeatures(int argc, char** argv) {
   return RunCommand(app, argc, argv, flags, [&] {
     extraction_flags.Apply(&options);
     Database database(database_path);
+    const RunLock lock(DatabaseLockPath(database_path), database_path);
     const FeatureExtractionStats stats = ExtractFeatures(options, image_dir, &database);
     if (stats.num_images_found == 0) throw InputError(image_dir + ": no images found");
     std::cout << "features: " << stats.num_images_found << " images, " << stats.num_extracted

@@ -1,4 +1,5 @@
 // parallax: incremental Structure from Motion. Dispatches to one subcommand per stage.
+#include <csignal>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -43,6 +44,9 @@ void PrintUsage() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A write past a file-size limit (ulimit -f) then fails with EFBIG and a one-line error
+  // naming the file, instead of SIGXFSZ ending the process with a core dump.
+  std::signal(SIGXFSZ, SIG_IGN);
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     PrintUsage();

@@ -7,6 +7,7 @@
 #include "parallax/pipeline/run_summary.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
+#include "parallax/util/run_lock.h"
 #include "parallax/util/timer.h"
 
 namespace parallax::cli {
@@ -30,8 +31,10 @@ int RunMapper(int argc, char** argv) {
     if (!std::filesystem::exists(database_path)) {
       throw InputError(database_path + ": database does not exist");
     }
-    Database database(database_path);
     CreateDirectoryOrThrow(output);
+    const RunLock output_lock(OutputLockPath(output), output);
+    Database database(database_path);
+    const RunLock database_lock(DatabaseLockPath(database_path), database_path);
     Timer timer;
     MappingStageResult result = RunMappingStage(options, database, image_path, output);
     const StageTimings timings = {{"mapping", timer.ElapsedSeconds()}};

@@ -7,6 +7,7 @@
 #include "parallax/cli/pipeline_options_cli.h"
 #include "parallax/pipeline/feature_matching.h"
 #include "parallax/util/check.h"
+#include "parallax/util/run_lock.h"
 
 namespace parallax::cli {
 namespace {
@@ -84,6 +85,7 @@ int RunMatch(int argc, char** argv) {
       throw InputError(database_path + ": database does not exist (run parallax features)");
     }
     Database database(database_path);
+    const RunLock lock(DatabaseLockPath(database_path), database_path);
     const FeatureMatchingStats stats = MatchAndVerify(options, &database);
     if (print_stats) PrintStatsTables(database);
     std::cout << "match: " << stats.num_pairs << " pairs, " << stats.num_matched << " matched, "

@@ -83,11 +83,12 @@ class ResumeTest : public ::testing::Test {
             out.string(),  "--threads", "2", "--seed", "3"};
   }
 
-  // Starts the command and SIGKILLs it once `ready(out, stderr)` holds; retries (a fresh
-  // output folder each time) when the run got past the wanted stage before the kill. Returns
-  // the output folder of the killed run.
+  // Starts the command and sends it `signal` once `ready(out, stderr)` holds; retries (a
+  // fresh output folder each time) when the run got past the wanted stage before the signal.
+  // Returns the output folder of the signalled run; `*result` (when given) is how it ended.
   template <typename Ready, typename StillInStage>
-  fs::path RunAndKill(const std::string& name, Ready ready, StillInStage still_in_stage) {
+  fs::path RunAndKill(const std::string& name, Ready ready, StillInStage still_in_stage,
+                      int signal = SIGKILL, ProcessResult* signalled_result = nullptr) {
     for (int attempt = 0; attempt < 5; ++attempt) {
       const fs::path out = dir_->path() / (name + std::to_string(attempt));
       std::vector<std::string> argv = {test::ParallaxBinary()};
@@ -99,7 +100,7 @@ class ResumeTest : public ::testing::Test {
       bool killed = false;
       while (child.Running() && std::chrono::steady_clock::now() < deadline) {
         if (ready(out, child.Stderr())) {
-          child.KillAndReap(SIGKILL);
+          child.KillAndReap(signal);
           killed = true;
           break;
         }
@@ -107,7 +108,8 @@ class ResumeTest : public ::testing::Test {
       }
       const ProcessResult result = child.Wait(1);
       if (killed && still_in_stage(out, result.err)) {
-        EXPECT_EQ(result.signal, SIGKILL);
+        if (signal == SIGKILL) EXPECT_EQ(result.signal, SIGKILL);
+        if (signalled_result != nullptr) *signalled_result = result;
         return out;
       }
       if (!killed && (result.timed_out || result.signal != 0 || result.exit_code != 0)) {
@@ -209,6 +211,73 @@ TEST_F(ResumeTest, KilledDuringMatchingResumesWithoutRedoingStoredWork) {
   const nlohmann::json summary = Rerun(out);
   EXPECT_EQ(summary["features"]["images_skipped_already_stored"], kNumViews);
   EXPECT_EQ(summary["features"]["images_extracted"], 0);
+  EXPECT_EQ(summary["matching"]["pairs_skipped_already_stored"], stored_pairs);
+  EXPECT_EQ(summary["matching"]["pairs_matched"], kNumPairs - stored_pairs);
+  ExpectSameQuality(summary);
+}
+
+// Ctrl-C (issue 22): the run stops once the images extracted so far are stored, says so in
+// one line, exits 130, and the same command resumes from there.
+TEST_F(ResumeTest, CtrlCDuringExtractionStopsAtASafePointAndSaysHowToResume) {
+  ProcessResult interrupted;
+  const fs::path out = RunAndKill(
+      "interrupted_in_extraction",
+      [](const fs::path& out, const std::string&) {
+        const auto count = CountRows(out / "database.db", "descriptors");
+        return count && *count >= 1 && *count < kNumViews;
+      },
+      [](const fs::path&, const std::string& err) {
+        return err.find("Feature extraction: 12 extracted") == std::string::npos;
+      },
+      SIGINT, &interrupted);
+  ASSERT_FALSE(out.empty());
+  EXPECT_TRUE(interrupted.ExitedWith(130)) << interrupted.err;
+  const std::regex said(
+      "\ninterrupted \\(SIGINT\\): features of ([0-9]+) of 12 images are stored in [^\n]*"
+      "database\\.db; run the same command again to resume\n$");
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(interrupted.err, match, said)) << interrupted.err;
+  test::ExpectNoPartialOutput(out);
+  const size_t said_stored = std::stoul(match[1]);
+  size_t stored = 0;
+  {
+    Database database(out / "database.db");
+    stored = database.NumImages();
+    for (const Image& image : database.ReadAllImages()) {
+      EXPECT_TRUE(database.ExistsDescriptors(image.image_id));
+    }
+  }
+  EXPECT_EQ(stored, said_stored);
+  const nlohmann::json summary = Rerun(out);
+  EXPECT_EQ(summary["features"]["images_skipped_already_stored"], stored);
+  EXPECT_EQ(summary["features"]["images_extracted"], kNumViews - stored);
+  ExpectSameQuality(summary);
+}
+
+// kill (SIGTERM) during matching: the finished pairs are stored, exit status 143.
+TEST_F(ResumeTest, SigtermDuringMatchingKeepsTheFinishedPairs) {
+  const std::regex progress("matching: [1-9][0-9]*/[0-9]+");
+  ProcessResult interrupted;
+  const fs::path out = RunAndKill(
+      "interrupted_in_matching",
+      [&](const fs::path&, const std::string& err) { return std::regex_search(err, progress); },
+      [](const fs::path&, const std::string& err) {
+        return err.find("pairs matched") == std::string::npos;
+      },
+      SIGTERM, &interrupted);
+  ASSERT_FALSE(out.empty());
+  EXPECT_TRUE(interrupted.ExitedWith(143)) << interrupted.err;
+  EXPECT_NE(interrupted.err.find("interrupted (SIGTERM): "), std::string::npos) << interrupted.err;
+  EXPECT_NE(interrupted.err.find(" pairs are matched and verified in "), std::string::npos);
+  test::ExpectNoPartialOutput(out);
+  size_t stored_pairs = 0;
+  {
+    Database database(out / "database.db");
+    stored_pairs = database.ReadTwoViewGeometries().size();
+  }
+  // Unlike a kill, the pairs finished before the signal were committed.
+  EXPECT_GT(stored_pairs, 0u);
+  const nlohmann::json summary = Rerun(out);
   EXPECT_EQ(summary["matching"]["pairs_skipped_already_stored"], stored_pairs);
   EXPECT_EQ(summary["matching"]["pairs_matched"], kNumPairs - stored_pairs);
   ExpectSameQuality(summary);

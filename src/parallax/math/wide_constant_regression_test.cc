@@ -2,9 +2,9 @@
 // AVX-512 machines (issue 23, docs/portable-build.md): the reproducer is compiled with
 // -march=x86-64-v4 and the build's own flags, so it passes only while the workaround in
 // cmake/ParallaxArch.cmake protects AVX-512 code. It runs where the CPU has AVX-512.
-#include "parallax/math/wide_constant_reproducer.h"
-
 #include <gtest/gtest.h>
+
+#include "parallax/math/wide_constant_reproducer.h"
 
 namespace parallax {
 namespace {

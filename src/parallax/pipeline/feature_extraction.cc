@@ -1,10 +1,14 @@
 #include "parallax/pipeline/feature_extraction.h"
 
+#include <chrono>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <opencv2/core.hpp>
 
 #include "parallax/util/check.h"
+#include "parallax/util/content_hash.h"
+#include "parallax/util/interrupt.h"
 #include "parallax/util/logging.h"
 #include "parallax/util/progress.h"
 #include "parallax/util/threading.h"
@@ -42,11 +46,52 @@ struct ExtractionResult {
   size_t height = 0;
   FeatureKeypoints keypoints;
   FeatureDescriptors descriptors;
+  ImageFileFingerprint fingerprint;
+  double hash_seconds = 0;
 };
+
+// Size and modification time of the file as it is now (no digest).
+ImageFileFingerprint StatImageFile(const std::filesystem::path& path) {
+  std::error_code error;
+  ImageFileFingerprint fingerprint;
+  fingerprint.size = static_cast<uint64_t>(std::filesystem::file_size(path, error));
+  if (error) throw InputError(path.string() + ": cannot read the file size: " + error.message());
+  const auto mtime = std::filesystem::last_write_time(path, error);
+  if (error) throw InputError(path.string() + ": cannot read the modification time");
+  fingerprint.mtime_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(mtime.time_since_epoch()).count();
+  return fingerprint;
+}
+
+// The fingerprint with its digest; adds the time spent to `*hash_seconds`.
+ImageFileFingerprint FingerprintImageFile(const std::filesystem::path& path,
+                                          double* hash_seconds) {
+  const Timer timer;
+  ImageFileFingerprint fingerprint = StatImageFile(path);
+  fingerprint.content_hash = HashFile(path);
+  *hash_seconds += timer.ElapsedSeconds();
+  return fingerprint;
+}
+
+// Whether the features stored for `image_id` were computed from the file at `path` as it is
+// now. Size and modification time decide when both match; otherwise the digest does (a copy
+// with a new time, `touch`), and the stored fingerprint is brought up to date. Images stored
+// without a fingerprint (by COLMAP, or an older Parallax) are taken as current and get one.
+bool StoredFeaturesAreCurrent(image_t image_id, const std::filesystem::path& path,
+                              Database* database, FeatureExtractionStats* stats) {
+  const std::optional<ImageFileFingerprint> stored = database->ReadImageFileFingerprint(image_id);
+  const ImageFileFingerprint now = StatImageFile(path);
+  if (stored && stored->size == now.size && stored->mtime_ns == now.mtime_ns) return true;
+  const ImageFileFingerprint hashed = FingerprintImageFile(path, &stats->hash_thread_seconds);
+  if (stored && stored->content_hash != hashed.content_hash) return false;
+  database->WriteImageFileFingerprint(image_id, hashed);
+  return true;
+}
 
 ExtractionResult ExtractImage(const ExtractionJob& job, const FeatureExtractionOptions& options) {
   ExtractionResult result;
   try {
+    result.fingerprint = FingerprintImageFile(job.path, &result.hash_seconds);
     const Bitmap bitmap = ReadBitmap(job.path, options.reader);
     result.width = static_cast<size_t>(bitmap.Width());
     result.height = static_cast<size_t>(bitmap.Height());
@@ -101,16 +146,37 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
   CheckCameraSetup(options.camera);
   CameraAssigner camera_assigner(options.camera, database);
 
+  std::set<std::string> names_in_folder;
   std::vector<ExtractionJob> jobs;
   for (const std::filesystem::path& path : paths) {
     ExtractionJob job{path, path.filename().string(),
                       database->ImageIdByName(path.filename().string())};
+    names_in_folder.insert(job.name);
     if (job.image_id && database->ExistsKeypoints(*job.image_id) &&
         database->ExistsDescriptors(*job.image_id)) {
-      ++stats.num_skipped;
-      continue;
+      if (StoredFeaturesAreCurrent(*job.image_id, path, database, &stats)) {
+        ++stats.num_skipped;
+        continue;
+      }
+      // Another photo under the same name: nothing stored for it may be reused.
+      PARALLAX_LOG(Warning) << path.string()
+                            << ": changed since its features were stored; extracting it again "
+                               "and matching it again with every image";
+      stats.changed.push_back(job.name);
+      database->DeleteImage(*job.image_id);
+      job.image_id.reset();
     }
     jobs.push_back(std::move(job));
+  }
+  if (options.forget_missing_images) {
+    for (const Image& image : database->ReadAllImages()) {
+      if (names_in_folder.count(image.name) > 0) continue;
+      PARALLAX_LOG(Warning) << (image_dir / image.name).string()
+                            << ": in the database but no longer an image of the folder; left "
+                               "out, its features and matches deleted";
+      stats.removed.push_back(image.name);
+      database->DeleteImage(image.image_id);
+    }
   }
   PARALLAX_LOG(Info) << "Feature extraction: " << paths.size() << " images in "
                      << image_dir.string() << ", " << stats.num_skipped
@@ -149,8 +215,11 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
         stats.failed.emplace_back(job.name, error.what());
         return;
       }
-      database->WriteImageWithFeatures(job.name, camera_id, result.keypoints, result.descriptors);
+      database->WriteImageWithFeatures(job.name, camera_id, result.keypoints, result.descriptors,
+                                       result.fingerprint);
     }
+    if (job.image_id) database->WriteImageFileFingerprint(*job.image_id, result.fingerprint);
+    stats.hash_thread_seconds += result.hash_seconds;
     ++stats.num_extracted;
     total_keypoints += result.keypoints.size();
     if (result.keypoints.empty()) {
@@ -169,6 +238,9 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
     const OpenCvThreadsGuard opencv_threads(
         /*single=*/jobs.size() >= static_cast<size_t>(EffectiveNumThreads(options.num_threads)));
     ParallelFor(0, jobs.size(), options.num_threads, [&](size_t index) {
+      // After a signal no new image starts; those finished are written in order up to the
+      // first that did not run.
+      if (PendingInterruptSignal() != 0) return;
       auto result = std::make_unique<ExtractionResult>(ExtractImage(jobs[index], options));
       std::lock_guard<std::mutex> lock(mutex);
       results[index] = std::move(result);
@@ -181,6 +253,9 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
     });
   }
   progress.Finish();
+  ThrowIfInterrupted("features of " + std::to_string(stats.num_skipped + stats.num_extracted) +
+                     " of " + std::to_string(paths.size()) + " images are stored in " +
+                     database->Path().string());
 
   stats.mean_num_keypoints =
       stats.num_extracted > 0 ? static_cast<double>(total_keypoints) / stats.num_extracted : 0.0;
@@ -188,7 +263,8 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
   PARALLAX_LOG(Info) << "Feature extraction: " << stats.num_extracted << " extracted, "
                      << stats.num_skipped << " skipped, " << stats.failed.size() << " failed, mean "
                      << static_cast<long>(stats.mean_num_keypoints + 0.5) << " keypoints, "
-                     << stats.seconds << " s";
+                     << stats.seconds << " s (digests " << stats.hash_thread_seconds
+                     << " s thread time)";
   return stats;
 }
 

@@ -21,6 +21,10 @@ struct FeatureExtractionOptions {
   ImageReaderOptions reader;   // Decoding limits.
   CameraSetupOptions camera;   // How cameras are assigned to images.
   int num_threads = -1;        // Images extracted in parallel; -1: all cores.
+  // Images stored in the database whose file has left the folder (or is no longer an image)
+  // are deleted from it with everything computed from them, so that no later stage uses
+  // them. Off: they stay (a database shared by several folders).
+  bool forget_missing_images = true;
   void Check() const;
 };
 
@@ -28,17 +32,27 @@ struct FeatureExtractionStats {
   size_t num_images_found = 0;  // Image files in the folder.
   size_t num_extracted = 0;     // Extracted and written in this run.
   size_t num_skipped = 0;       // Already in the database with features (resumed run).
+  // Names of stored images whose file changed since (other content: extracted again, their
+  // pairs matched again), and of stored images whose file is gone (deleted from the database).
+  std::vector<std::string> changed;
+  std::vector<std::string> removed;
   // (image name, reason) of files that could not be read or extracted, and of files named
   // like images (.jpg, .png, ...) that are not images by content.
   std::vector<std::pair<std::string, std::string>> failed;
   double mean_num_keypoints = 0;  // Over the images extracted in this run.
   double seconds = 0;
+  // Thread time spent digesting files (new images, and stored ones whose size or
+  // modification time changed).
+  double hash_thread_seconds = 0;
 };
 
 // Stage 1: detects SIFT features in every image of `image_dir` (not recursive; files found
 // by content) and writes image rows, keypoints and descriptors to `database`, one
 // transaction per image, so a killed run resumes where it stopped: images already in the
-// database with features are skipped. Unreadable files are logged (one warning each) and
+// database with features are skipped, unless their file changed since (a different size or
+// modification time, then a different XXH3 digest): those, and the pairs they are in, are
+// computed again. After SIGINT or SIGTERM (util/interrupt.h) it stops once the images
+// finished so far are stored, and throws Interrupted. Unreadable files are logged (one warning each) and
 // skipped. Images are processed in parallel and written in name order, so image ids are
 // deterministic. Throws InputError for a missing folder or intrinsics file, or a database
 // that cannot be written.

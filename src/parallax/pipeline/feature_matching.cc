@@ -6,6 +6,7 @@
 
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
+#include "parallax/util/interrupt.h"
 #include "parallax/util/logging.h"
 #include "parallax/util/progress.h"
 #include "parallax/util/threading.h"
@@ -28,6 +29,7 @@ struct PairJob {
   TwoViewGeometry geometry;
   double matching_seconds = 0;
   double verification_seconds = 0;
+  bool done = false;  // False when a signal stopped the batch before this pair ran.
 };
 
 bool IsVerified(const TwoViewGeometry& geometry) {
@@ -190,6 +192,8 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
     }
 
     ParallelFor(0, jobs.size(), options.num_threads, [&](size_t k) {
+      // After a signal no new pair starts; the finished ones are stored below.
+      if (PendingInterruptSignal() != 0) return;
       PairJob& job = jobs[k];
       const ImageFeatures& features1 = cache.at(job.image_id1);
       const ImageFeatures& features2 = cache.at(job.image_id2);
@@ -215,17 +219,20 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
         ThreadLocalPRNG() = saved_prng;
       }
       job.verification_seconds = pair_timer.ElapsedSeconds();
+      job.done = true;
       progress.Increment();
     });
 
     database->BeginTransaction();
     for (const PairJob& job : jobs) {
+      if (!job.done) continue;
       if (!job.has_matches) database->WriteMatches(job.image_id1, job.image_id2, job.matches);
       database->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
     }
     database->EndTransaction();
 
     for (const PairJob& job : jobs) {
+      if (!job.done) continue;
       PairMatchStats pair_stats;
       pair_stats.image_id1 = job.image_id1;
       pair_stats.image_id2 = job.image_id2;
@@ -238,6 +245,9 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
       stats.verification_thread_seconds += job.verification_seconds;
       if (IsVerified(job.geometry)) ++stats.num_verified;
     }
+    ThrowIfInterrupted(std::to_string(stats.num_skipped + stats.num_matched) + " of " +
+                       std::to_string(stats.num_pairs) + " pairs are matched and verified in " +
+                       database->Path().string());
   }
   progress.Finish();
 

@@ -70,11 +70,17 @@ void WriteModels(const std::vector<Reconstruction>& models, const std::filesyste
   // run with more models survives.
   const std::string suffix = std::to_string(static_cast<long>(getpid()));
   const fs::path staging = output_dir / ("sparse.tmp-" + suffix);
-  for (size_t index = 0; index < models.size(); ++index) {
-    const fs::path dir = staging / std::to_string(index);
-    CreateDirectoryOrThrow(dir);
-    if (write_binary) WriteReconstructionBinary(models[index], dir);
-    if (write_text) WriteReconstructionText(models[index], dir);
+  try {
+    for (size_t index = 0; index < models.size(); ++index) {
+      const fs::path dir = staging / std::to_string(index);
+      CreateDirectoryOrThrow(dir);
+      if (write_binary) WriteReconstructionBinary(models[index], dir);
+      if (write_text) WriteReconstructionText(models[index], dir);
+    }
+  } catch (...) {
+    // A failed write (disk full) leaves the earlier sparse/ and nothing of its own.
+    fs::remove_all(staging, error);
+    throw;
   }
   const fs::path sparse = output_dir / "sparse";
   const fs::path previous = output_dir / ("sparse.old-" + suffix);

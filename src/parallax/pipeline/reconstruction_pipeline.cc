@@ -4,6 +4,7 @@
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
+#include "parallax/util/run_lock.h"
 #include "parallax/util/timer.h"
 
 namespace parallax {
@@ -31,9 +32,13 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   }
   CheckCameraSetup(options.extraction.camera);
   CreateDirectoryOrThrow(output_dir);
+  // One run at a time per output folder and per database; a second stops here, before it
+  // has written anything.
+  const RunLock output_lock(OutputLockPath(output_dir), output_dir.string());
   const std::filesystem::path database_path =
       options.database_path.empty() ? output_dir / "database.db" : options.database_path;
   Database database(database_path);
+  const RunLock database_lock(DatabaseLockPath(database_path), database_path.string());
   ReconstructionPipelineResult result;
   Timer timer;
 

@@ -90,6 +90,30 @@ const std::vector<TableSpec>& ColmapTables() {
   return tables;
 }
 
+// Parallax's own tables, which COLMAP ignores (it reads only its own): what each image's
+// features were computed from, so that a rerun notices a photo edited or replaced since.
+const std::vector<TableSpec>& ParallaxTables() {
+  static const std::vector<TableSpec> tables = {
+      {"parallax_image_files",
+       {{"image_id", "INTEGER PRIMARY KEY NOT NULL"},
+        {"size", "INTEGER NOT NULL"},
+        {"mtime_ns", "INTEGER NOT NULL"},
+        {"content_hash", "TEXT NOT NULL"}},
+       {"FOREIGN KEY(image_id) REFERENCES images(image_id) ON DELETE CASCADE"}},
+  };
+  return tables;
+}
+
+// SQLite's message, with what the user can do about the usual cause of a failed write or
+// read (SQLite reports a write past `ulimit -f` as a disk I/O error).
+std::string DescribeError(sqlite3* db, const std::string& message) {
+  const int code = sqlite3_errcode(db) & 0xff;
+  if (code == SQLITE_FULL || code == SQLITE_IOERR) {
+    return message + " (is the disk full, or a file-size limit reached?)";
+  }
+  return message;
+}
+
 std::string CreateTableSql(const TableSpec& table) {
   std::string sql = std::string("CREATE TABLE IF NOT EXISTS ") + table.name + " (";
   bool first = true;
@@ -154,7 +178,7 @@ class Statement {
     if (rc != SQLITE_OK) Fail("cannot bind a parameter");
   }
   [[noreturn]] void Fail(const std::string& what) const {
-    throw InputError(path_.string() + ": " + what + ": " + sqlite3_errmsg(db_));
+    throw InputError(path_.string() + ": " + what + ": " + DescribeError(db_, sqlite3_errmsg(db_)));
   }
 
   sqlite3* db_;
@@ -182,7 +206,7 @@ class ScopedTransaction {
   void Exec(const char* sql) {
     char* error = nullptr;
     if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-      const std::string message = error != nullptr ? error : "unknown error";
+      const std::string message = DescribeError(db_, error != nullptr ? error : "unknown error");
       sqlite3_free(error);
       throw InputError(path_.string() + ": " + sql + " failed: " + message);
     }
@@ -343,7 +367,7 @@ Image ImageFromRow(const Statement& statement) {
 void Exec(sqlite3* db, const std::filesystem::path& path, const std::string& sql) {
   char* error = nullptr;
   if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error) != SQLITE_OK) {
-    const std::string message = error != nullptr ? error : sqlite3_errmsg(db);
+    const std::string message = DescribeError(db, error != nullptr ? error : sqlite3_errmsg(db));
     sqlite3_free(error);
     throw InputError(path.string() + ": \"" + sql + "\" failed: " + message);
   }
@@ -394,6 +418,11 @@ bool UpgradeSchema(sqlite3* db, const std::filesystem::path& path, bool apply) {
       }
     }
   }
+  for (const TableSpec& table : ParallaxTables()) {
+    if (existing_tables.count(table.name) > 0) continue;
+    complete = false;
+    if (apply) Exec(db, path, CreateTableSql(table));
+  }
   if (!has_name_index) {
     complete = false;
     if (apply) Exec(db, path, "CREATE UNIQUE INDEX IF NOT EXISTS index_name ON images(name);");
@@ -422,7 +451,11 @@ Database::Database(const std::filesystem::path& path) : path_(path) {
         SQLITE_OK) {
       const std::string message = error != nullptr ? error : sqlite3_errmsg(db_);
       sqlite3_free(error);
-      throw InputError(path.string() + ": not a valid SQLite database (" + message + ")");
+      if ((sqlite3_errcode(db_) & 0xff) == SQLITE_NOTADB) {
+        throw InputError(path.string() + ": not a valid SQLite database (" + message + ")");
+      }
+      throw InputError(path.string() + ": cannot read the database: " +
+                       DescribeError(db_, message));
     }
     // WAL: a killed writer leaves the committed state; the next opener replays the log.
     // synchronous=NORMAL keeps that guarantee for process crashes (not for power loss).
@@ -599,14 +632,71 @@ void Database::WriteDescriptors(image_t image_id, const FeatureDescriptors& desc
 
 image_t Database::WriteImageWithFeatures(const std::string& name, camera_t camera_id,
                                          const FeatureKeypoints& keypoints,
-                                         const FeatureDescriptors& descriptors) {
+                                         const FeatureDescriptors& descriptors,
+                                         const std::optional<ImageFileFingerprint>& fingerprint) {
   PARALLAX_CHECK_EQ(keypoints.size(), static_cast<size_t>(descriptors.rows()));
   ScopedTransaction transaction(db_, path_);
   const image_t image_id = WriteImage(name, camera_id);
   WriteKeypoints(image_id, keypoints);
   WriteDescriptors(image_id, descriptors);
+  if (fingerprint) WriteImageFileFingerprint(image_id, *fingerprint);
   transaction.Commit();
   return image_id;
+}
+
+void Database::WriteImageFileFingerprint(image_t image_id, const ImageFileFingerprint& fingerprint) {
+  Statement statement(db_, path_,
+                      "INSERT OR REPLACE INTO parallax_image_files(image_id, size, mtime_ns, "
+                      "content_hash) VALUES(?, ?, ?, ?);");
+  statement.BindInt64(1, image_id);
+  statement.BindInt64(2, static_cast<int64_t>(fingerprint.size));
+  statement.BindInt64(3, fingerprint.mtime_ns);
+  statement.BindText(4, fingerprint.content_hash);
+  statement.Step("cannot write an image file fingerprint");
+}
+
+std::optional<ImageFileFingerprint> Database::ReadImageFileFingerprint(image_t image_id) const {
+  Statement statement(
+      db_, path_,
+      "SELECT size, mtime_ns, content_hash FROM parallax_image_files WHERE image_id=?;");
+  statement.BindInt64(1, image_id);
+  if (!statement.Step()) return std::nullopt;
+  ImageFileFingerprint fingerprint;
+  fingerprint.size = static_cast<uint64_t>(statement.Int64(0));
+  fingerprint.mtime_ns = statement.Int64(1);
+  fingerprint.content_hash = statement.Text(2);
+  return fingerprint;
+}
+
+void Database::DeleteImage(image_t image_id) {
+  ScopedTransaction transaction(db_, path_);
+  camera_t camera_id = kInvalidCameraId;
+  {
+    Statement statement(db_, path_, "SELECT camera_id FROM images WHERE image_id=?;");
+    statement.BindInt64(1, image_id);
+    if (!statement.Step()) return;  // Nothing stored.
+    camera_id = static_cast<camera_t>(statement.Int64(0));
+  }
+  // Pairs hold the image as either id of pair_id = id1 * kMaxNumImages + id2.
+  for (const char* sql : {"DELETE FROM matches WHERE pair_id / 2147483647 = ?1 OR "
+                          "pair_id % 2147483647 = ?1;",
+                          "DELETE FROM two_view_geometries WHERE pair_id / 2147483647 = ?1 OR "
+                          "pair_id % 2147483647 = ?1;",
+                          "DELETE FROM keypoints WHERE image_id = ?1;",
+                          "DELETE FROM descriptors WHERE image_id = ?1;",
+                          "DELETE FROM parallax_image_files WHERE image_id = ?1;",
+                          "DELETE FROM images WHERE image_id = ?1;"}) {
+    Statement statement(db_, path_, sql);
+    statement.BindInt64(1, image_id);
+    statement.Step("cannot delete an image");
+  }
+  // A camera of its own goes with it; a shared one stays.
+  Statement camera(db_, path_,
+                   "DELETE FROM cameras WHERE camera_id = ?1 AND NOT EXISTS "
+                   "(SELECT 1 FROM images WHERE camera_id = ?1);");
+  camera.BindInt64(1, camera_id);
+  camera.Step("cannot delete an unused camera");
+  transaction.Commit();
 }
 
 bool Database::ExistsKeypoints(image_t image_id) const {

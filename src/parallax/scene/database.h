@@ -16,6 +16,15 @@ struct sqlite3;
 
 namespace parallax {
 
+// What an image's features were computed from: the file's size and modification time (cheap
+// to compare) and the XXH3-128 digest of its bytes (util/content_hash.h), which decides when
+// the first two differ. Stored in Parallax's own table; COLMAP ignores it.
+struct ImageFileFingerprint {
+  uint64_t size = 0;
+  int64_t mtime_ns = 0;
+  std::string content_hash;
+};
+
 // The feature and match store: SQLite with COLMAP 3.8's schema (tables cameras, images,
 // keypoints, descriptors, matches, two_view_geometries; the same blob layouts and pair_id
 // encoding), so `colmap mapper` reads a Parallax database and Parallax reads COLMAP's.
@@ -51,7 +60,15 @@ class Database {
   // Writes image row, keypoints and descriptors in one transaction (resumable extraction).
   image_t WriteImageWithFeatures(const std::string& name, camera_t camera_id,
                                  const FeatureKeypoints& keypoints,
-                                 const FeatureDescriptors& descriptors);
+                                 const FeatureDescriptors& descriptors,
+                                 const std::optional<ImageFileFingerprint>& fingerprint = {});
+  void WriteImageFileFingerprint(image_t image_id, const ImageFileFingerprint& fingerprint);
+  // Nullopt for images stored by COLMAP or by a Parallax before fingerprints.
+  std::optional<ImageFileFingerprint> ReadImageFileFingerprint(image_t image_id) const;
+  // Deletes the image and everything computed from it, in one transaction: keypoints,
+  // descriptors, fingerprint, the matches and geometries of every pair it is in, and its
+  // camera when no other image uses that camera.
+  void DeleteImage(image_t image_id);
   bool ExistsKeypoints(image_t image_id) const;
   bool ExistsDescriptors(image_t image_id) const;
   FeatureKeypoints ReadKeypoints(image_t image_id) const;

@@ -228,6 +228,51 @@ TEST_F(DatabaseTest, FeaturesRoundTrip) {
   EXPECT_EQ(database.NumKeypoints(3), 0u);
 }
 
+TEST_F(DatabaseTest, FingerprintsRoundTripAndGoWithTheirImage) {
+  Database database(path_);
+  const camera_t shared = database.WriteCamera(
+      Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
+  const camera_t own = database.WriteCamera(
+      Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 600, 64, 48));
+  const ImageFileFingerprint fingerprint{12345, 1700000000123456789, "00ff"};
+  const image_t a = database.WriteImageWithFeatures("a.png", shared, RandomKeypoints(5),
+                                                    RandomDescriptors(5), fingerprint);
+  const image_t b = database.WriteImageWithFeatures("b.png", shared, RandomKeypoints(5),
+                                                    RandomDescriptors(5));
+  const image_t c = database.WriteImageWithFeatures("c.png", own, RandomKeypoints(5),
+                                                    RandomDescriptors(5), fingerprint);
+  const auto read = database.ReadImageFileFingerprint(a);
+  ASSERT_TRUE(read.has_value());
+  EXPECT_EQ(read->size, 12345u);
+  EXPECT_EQ(read->mtime_ns, 1700000000123456789);
+  EXPECT_EQ(read->content_hash, "00ff");
+  EXPECT_FALSE(database.ReadImageFileFingerprint(b).has_value());
+  database.WriteImageFileFingerprint(b, {1, 2, "ab"});
+  EXPECT_EQ(database.ReadImageFileFingerprint(b)->content_hash, "ab");
+  for (const auto& [first, second] : {std::pair{a, b}, std::pair{c, a}, std::pair{b, c}}) {
+    database.WriteMatches(first, second, RandomMatches(10));
+    database.WriteTwoViewGeometry(first, second, RandomGeometry(8));
+  }
+
+  // Deleting c takes its features, fingerprint, both of its pairs and its own camera.
+  database.DeleteImage(c);
+  EXPECT_FALSE(database.ImageIdByName("c.png").has_value());
+  EXPECT_FALSE(database.ExistsKeypoints(c));
+  EXPECT_FALSE(database.ExistsDescriptors(c));
+  EXPECT_FALSE(database.ReadImageFileFingerprint(c).has_value());
+  EXPECT_FALSE(database.ExistsMatches(a, c));
+  EXPECT_FALSE(database.ExistsTwoViewGeometry(b, c));
+  EXPECT_TRUE(database.ExistsMatches(a, b));
+  EXPECT_TRUE(database.ExistsTwoViewGeometry(a, b));
+  EXPECT_FALSE(database.ExistsCamera(own));
+  // Deleting a leaves the camera b still uses.
+  database.DeleteImage(a);
+  EXPECT_FALSE(database.ExistsMatches(a, b));
+  EXPECT_TRUE(database.ExistsCamera(shared));
+  EXPECT_EQ(database.NumImages(), 1u);
+  EXPECT_NO_THROW(database.DeleteImage(a));  // Already gone: nothing to do.
+}
+
 TEST_F(DatabaseTest, MatchesAreStoredWithSmallerIdFirst) {
   Database database(path_);
   const FeatureMatches matches12 = RandomMatches(50);
@@ -423,8 +468,10 @@ TEST_F(DatabaseTest, ColmapCompatibleLayout) {
                                    "name NOT LIKE 'sqlite_%' ORDER BY name;")) {
     tables.push_back(row[0]);
   }
+  // COLMAP's six, and Parallax's own table of image file fingerprints, which COLMAP ignores.
   EXPECT_EQ(tables, (std::vector<std::string>{"cameras", "descriptors", "images", "keypoints",
-                                              "matches", "two_view_geometries"}));
+                                              "matches", "parallax_image_files",
+                                              "two_view_geometries"}));
   for (const auto& [table, columns] : expected) {
     std::vector<Column> actual;
     for (const auto& row : raw.Query("PRAGMA table_info(" + table + ");")) {

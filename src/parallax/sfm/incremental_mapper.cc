@@ -9,6 +9,7 @@
 #include "parallax/sfm/next_view.h"
 #include "parallax/sfm/tracked_reconstruction.h"
 #include "parallax/util/check.h"
+#include "parallax/util/interrupt.h"
 #include "parallax/util/logging.h"
 #include "parallax/util/timer.h"
 
@@ -99,6 +100,10 @@ class IncrementalMapper::ModelBuilder {
   void Grow() {
     std::map<image_t, int> trials;
     while (true) {
+      // Between registrations the model is consistent, and nothing is written until the
+      // mapper returns: a signal here leaves the outputs of the last finished run as they were.
+      ThrowIfInterrupted("mapping stopped after " + std::to_string(reconstruction_.NumRegImages()) +
+                         " registered images; no model was written");
       bool registered_any = false;
       for (const image_t image_id : RankCandidates(trials)) {
         MapperImageReport& report = summary_->images[image_id];

@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <system_error>
@@ -18,12 +20,16 @@ void WriteFileAtomically(const std::filesystem::path& path,
   {
     std::ofstream stream(temp_path, binary ? std::ios::binary | std::ios::out : std::ios::out);
     if (!stream) throw InputError(path.string() + ": cannot open for writing");
+    errno = 0;
     writer(stream);
     stream.flush();
     if (!stream) {
+      // The stream keeps no error code; errno still holds the failed write's (ENOSPC, EFBIG).
+      const int write_error = errno;
       std::error_code ignored;
       std::filesystem::remove(temp_path, ignored);
-      throw InputError(path.string() + ": write failed");
+      throw InputError(path.string() + ": write failed" +
+                       (write_error != 0 ? std::string(": ") + std::strerror(write_error) : ""));
     }
   }
   std::error_code error;
