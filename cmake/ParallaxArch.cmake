@@ -5,14 +5,16 @@
 # default elsewhere. PARALLAX_NATIVE=ON builds for the build machine (-march=native) instead.
 include(CheckCXXCompilerFlag)
 
+# Whether the build targets x86-64 (also read by math/CMakeLists.txt for the reproducer).
+set(PARALLAX_X86_64 FALSE)
+if(CMAKE_SYSTEM_PROCESSOR MATCHES "^(x86_64|AMD64|amd64)$")
+  set(PARALLAX_X86_64 TRUE)
+endif()
+
 function(parallax_set_instruction_set)
-  set(is_x86_64 FALSE)
-  if(CMAKE_SYSTEM_PROCESSOR MATCHES "^(x86_64|AMD64|amd64)$")
-    set(is_x86_64 TRUE)
-  endif()
   if(PARALLAX_NATIVE)
     set(arch_flag -march=native)
-  elseif(is_x86_64 AND PARALLAX_ARCH)
+  elseif(PARALLAX_X86_64 AND PARALLAX_ARCH)
     set(arch_flag -march=${PARALLAX_ARCH})
   endif()
   if(arch_flag)
@@ -26,7 +28,7 @@ function(parallax_set_instruction_set)
   # by-pieces moves and stores at 128 bits keeps every such constant a complete 128-bit one,
   # which that code path handles correctly. src/parallax/util/wide_constant_regression_test.cc
   # holds the reproducer.
-  if(is_x86_64 AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU"
+  if(PARALLAX_X86_64 AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU"
      AND CMAKE_CXX_COMPILER_VERSION VERSION_GREATER_EQUAL 12)
     check_cxx_compiler_flag("-mmove-max=128 -mstore-max=128" PARALLAX_HAS_MOVE_MAX)
     if(PARALLAX_HAS_MOVE_MAX)

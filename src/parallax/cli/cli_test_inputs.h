@@ -3,11 +3,13 @@
 // Bad inputs made at test time and the checks of what a user must see (header only, for the
 // cli/*_test.cc end-to-end tests).
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <array>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -25,6 +27,29 @@ inline void WriteBytes(const fs::path& path, const std::string& bytes) {
 }
 
 inline std::string ReadBytes(const fs::path& path) { return ReadFileToString(path); }
+
+// The first column of the first row of `sql` on a database opened read-only (a run being
+// watched may hold it open for writing); nullopt while the file, its schema or the row does
+// not exist.
+inline std::optional<std::string> QueryFirstValue(const fs::path& database,
+                                                  const std::string& sql) {
+  std::error_code error;
+  if (!fs::exists(database, error)) return std::nullopt;
+  sqlite3* db = nullptr;
+  std::optional<std::string> value;
+  if (sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+    sqlite3_busy_timeout(db, 1000);
+    sqlite3_stmt* statement = nullptr;
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &statement, nullptr) == SQLITE_OK &&
+        sqlite3_step(statement) == SQLITE_ROW) {
+      const unsigned char* text = sqlite3_column_text(statement, 0);
+      value = text != nullptr ? reinterpret_cast<const char*>(text) : "";
+    }
+    sqlite3_finalize(statement);
+  }
+  sqlite3_close_v2(db);
+  return value;
+}
 
 // `text` with the first `from` replaced by `to`; a test failure when `from` is not in it (the
 // malformed-file cases start from a valid file and must change it).

@@ -5,7 +5,6 @@
 // guessed from timing; a run that got past the stage before the kill is repeated.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sqlite3.h>
 
 #include <nlohmann/json.hpp>
 #include <iostream>
@@ -31,22 +30,9 @@ constexpr int kNumPairs = kNumViews * (kNumViews - 1) / 2;
 // COUNT(*) of a table, read without writing (the run being watched holds the database open);
 // nullopt while the database or its schema does not exist yet.
 std::optional<int64_t> CountRows(const fs::path& database, const std::string& table) {
-  std::error_code error;
-  if (!fs::exists(database, error)) return std::nullopt;
-  sqlite3* db = nullptr;
-  std::optional<int64_t> count;
-  if (sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_busy_timeout(db, 1000);
-    sqlite3_stmt* statement = nullptr;
-    const std::string sql = "SELECT COUNT(*) FROM " + table + ";";
-    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &statement, nullptr) == SQLITE_OK &&
-        sqlite3_step(statement) == SQLITE_ROW) {
-      count = sqlite3_column_int64(statement, 0);
-    }
-    sqlite3_finalize(statement);
-  }
-  sqlite3_close_v2(db);
-  return count;
+  const auto count = test::QueryFirstValue(database, "SELECT COUNT(*) FROM " + table + ";");
+  if (!count) return std::nullopt;
+  return std::stoll(*count);
 }
 
 nlohmann::json ReadSummary(const fs::path& out) {

@@ -162,7 +162,6 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
       PARALLAX_LOG(Warning) << path.string()
                             << ": changed since its features were stored; extracting it again "
                                "and matching it again with every image";
-      stats.changed.push_back(job.name);
       database->DeleteImage(*job.image_id);
       job.image_id.reset();
     }
@@ -174,7 +173,6 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
       PARALLAX_LOG(Warning) << (image_dir / image.name).string()
                             << ": in the database but no longer an image of the folder; left "
                                "out, its features and matches deleted";
-      stats.removed.push_back(image.name);
       database->DeleteImage(image.image_id);
     }
   }

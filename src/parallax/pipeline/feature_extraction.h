@@ -32,10 +32,6 @@ struct FeatureExtractionStats {
   size_t num_images_found = 0;  // Image files in the folder.
   size_t num_extracted = 0;     // Extracted and written in this run.
   size_t num_skipped = 0;       // Already in the database with features (resumed run).
-  // Names of stored images whose file changed since (other content: extracted again, their
-  // pairs matched again), and of stored images whose file is gone (deleted from the database).
-  std::vector<std::string> changed;
-  std::vector<std::string> removed;
   // (image name, reason) of files that could not be read or extracted, and of files named
   // like images (.jpg, .png, ...) that are not images by content.
   std::vector<std::pair<std::string, std::string>> failed;

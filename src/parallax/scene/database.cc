@@ -677,16 +677,18 @@ void Database::DeleteImage(image_t image_id) {
     if (!statement.Step()) return;  // Nothing stored.
     camera_id = static_cast<camera_t>(statement.Int64(0));
   }
-  // Pairs hold the image as either id of pair_id = id1 * kMaxNumImages + id2.
-  for (const char* sql : {"DELETE FROM matches WHERE pair_id / 2147483647 = ?1 OR "
-                          "pair_id % 2147483647 = ?1;",
-                          "DELETE FROM two_view_geometries WHERE pair_id / 2147483647 = ?1 OR "
-                          "pair_id % 2147483647 = ?1;",
-                          "DELETE FROM keypoints WHERE image_id = ?1;",
-                          "DELETE FROM descriptors WHERE image_id = ?1;",
-                          "DELETE FROM parallax_image_files WHERE image_id = ?1;",
-                          "DELETE FROM images WHERE image_id = ?1;"}) {
-    Statement statement(db_, path_, sql);
+  // Pairs hold the image as either id of pair_id = id1 * kMaxNumImages + id2 (ImagePairToPairId).
+  for (const std::string table : {"matches", "two_view_geometries"}) {
+    const std::string sql =
+        "DELETE FROM " + table + " WHERE pair_id / ?2 = ?1 OR pair_id % ?2 = ?1;";
+    Statement statement(db_, path_, sql.c_str());
+    statement.BindInt64(1, image_id);
+    statement.BindInt64(2, static_cast<int64_t>(kMaxNumImages));
+    statement.Step("cannot delete the pairs of an image");
+  }
+  for (const std::string table : {"keypoints", "descriptors", "parallax_image_files", "images"}) {
+    const std::string sql = "DELETE FROM " + table + " WHERE image_id = ?1;";
+    Statement statement(db_, path_, sql.c_str());
     statement.BindInt64(1, image_id);
     statement.Step("cannot delete an image");
   }
