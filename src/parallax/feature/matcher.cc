@@ -8,6 +8,7 @@
 #include <immintrin.h>
 #endif
 
+#include "parallax/feature/similarity_kernel.h"
 #include "parallax/util/check.h"
 #include "parallax/util/threading.h"
 
@@ -79,13 +80,14 @@ void RowMax(const float* row, int n, float* max_value, int* max_index) {
   }
 }
 
-// tile(j, i) = descriptors2[c0 + j] . descriptors1[r0 + i]. Columns i are contiguous, so the
-// running top-2 per i is an element-wise update over each row (vectorises), and the best i
-// per j (the cross-check) is a reduction along the row.
-void ScanTile(const float* tile, int num_rows, int num_cols, int c0, float* best, float* second,
-              int* best_index, float* col_best, int* col_best_index, int r0) {
+// tile(j, i) = tile[j * stride + i] = descriptors2[c0 + j] . descriptors1[r0 + i] for
+// i < num_cols. Columns i are contiguous, so the running top-2 per i is an element-wise
+// update over each row (vectorises), and the best i per j (the cross-check) is a reduction
+// along the row.
+void ScanTile(const float* tile, int num_rows, int num_cols, int stride, int c0, float* best,
+              float* second, int* best_index, float* col_best, int* col_best_index, int r0) {
   for (int j = 0; j < num_rows; ++j) {
-    const float* row = tile + static_cast<ptrdiff_t>(j) * num_cols;
+    const float* row = tile + static_cast<ptrdiff_t>(j) * stride;
     const int index2 = c0 + j;
     for (int i = 0; i < num_cols; ++i) {
       const float value = row[i];
@@ -145,7 +147,10 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
   // dominated by packing the image-2 chunks.
   const int num_threads = EffectiveNumThreads(options.num_threads);
   int row_block = (num1 + 4 * num_threads - 1) / (4 * num_threads);
-  row_block = std::clamp((row_block + 7) / 8 * 8, kMinRowBlock, kMaxRowBlock);
+  // A multiple of the kernel's panel width, so that no block but the last computes padding.
+  row_block = std::clamp(
+      (row_block + kSimilarityPanelWidth - 1) / kSimilarityPanelWidth * kSimilarityPanelWidth,
+      kMinRowBlock, kMaxRowBlock);
   const int num_row_blocks = (num1 + row_block - 1) / row_block;
 
   BestTwo rows;
@@ -160,17 +165,21 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
     col_best_index.assign(static_cast<size_t>(num_row_blocks) * num2, -1);
   }
 
+  const int dim = static_cast<int>(values1.cols());
   ParallelFor(0, num_row_blocks, num_threads, [&](size_t block) {
     const int r0 = static_cast<int>(block) * row_block;
     const int num_rows1 = std::min(row_block, num1 - r0);
-    RowMatrixXf tile(kColBlock, num_rows1);
-    const auto block1 = values1.middleRows(r0, num_rows1);
+    // The block's descriptors in the kernel's layout, packed once for all of image 2.
+    std::vector<float> block1_packed;
+    const int stride =
+        PackSimilarityColumns(values1.row(r0).data(), num_rows1, dim, &block1_packed);
+    std::vector<float> tile(static_cast<size_t>(kColBlock) * stride);
     for (int c0 = 0; c0 < num2; c0 += kColBlock) {
       const int num_rows2 = std::min(kColBlock, num2 - c0);
-      Eigen::Map<RowMatrixXf> similarities(tile.data(), num_rows2, num_rows1);
-      similarities.noalias() = values2.middleRows(c0, num_rows2) * block1.transpose();
+      ComputeSimilarities(block1_packed.data(), stride, values2.row(c0).data(), num_rows2,
+                          dim, tile.data());
       const size_t col_offset = block * static_cast<size_t>(num2) + c0;
-      ScanTile(tile.data(), num_rows2, num_rows1, c0, rows.best.data() + r0,
+      ScanTile(tile.data(), num_rows2, num_rows1, stride, c0, rows.best.data() + r0,
                rows.second.data() + r0, rows.best_index.data() + r0,
                options.cross_check ? col_best.data() + col_offset : nullptr,
                options.cross_check ? col_best_index.data() + col_offset : nullptr, r0);
