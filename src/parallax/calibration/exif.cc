@@ -13,12 +13,20 @@ constexpr uint16_t kTagMake = 0x010F;
 constexpr uint16_t kTagModel = 0x0110;
 constexpr uint16_t kTagOrientation = 0x0112;
 constexpr uint16_t kTagExifIfdPointer = 0x8769;
+constexpr uint16_t kTagGpsIfdPointer = 0x8825;
 constexpr uint16_t kTagFocalLength = 0x920A;
 constexpr uint16_t kTagPixelXDimension = 0xA002;
 constexpr uint16_t kTagPixelYDimension = 0xA003;
 constexpr uint16_t kTagFocalPlaneXResolution = 0xA20E;
 constexpr uint16_t kTagFocalPlaneResolutionUnit = 0xA210;
 constexpr uint16_t kTagFocalLengthIn35mmFilm = 0xA405;
+// Tags of the GPS IFD (their own numbering space).
+constexpr uint16_t kTagGpsLatitudeRef = 0x0001;
+constexpr uint16_t kTagGpsLatitude = 0x0002;
+constexpr uint16_t kTagGpsLongitudeRef = 0x0003;
+constexpr uint16_t kTagGpsLongitude = 0x0004;
+constexpr uint16_t kTagGpsAltitudeRef = 0x0005;
+constexpr uint16_t kTagGpsAltitude = 0x0006;
 
 // TIFF field types.
 constexpr uint16_t kTypeByte = 1;
@@ -181,10 +189,72 @@ std::optional<int64_t> ReadInteger(const TiffReader& reader, const IfdEntry& ent
   return static_cast<int64_t>(*value);
 }
 
+// Offsets of the sub-IFDs that IFD0 points to.
+struct SubIfdOffsets {
+  std::optional<uint32_t> exif;
+  std::optional<uint32_t> gps;
+};
+
+// Degrees from the three RATIONALs (degrees, minutes, seconds) of a GPS coordinate.
+std::optional<double> ReadDegrees(const TiffReader& reader, const IfdEntry& entry) {
+  if (entry.type != kTypeRational || entry.count != 3) return std::nullopt;
+  double degrees = 0, unit = 1;
+  for (uint64_t k = 0; k < 3; ++k, unit /= 60) {
+    IfdEntry part = entry;
+    part.value_offset = entry.value_offset + 8 * k;
+    const std::optional<double> value = ReadNumber(reader, part);
+    if (!value) return std::nullopt;
+    degrees += *value * unit;
+  }
+  return degrees;
+}
+
+// The GPS IFD: a position is kept only when both coordinates and their refs are valid.
+void ParseGpsIfd(const TiffReader& reader, uint64_t ifd_offset, ExifData* exif) {
+  uint16_t num_entries = 0;
+  if (!reader.ReadU16(ifd_offset, &num_entries)) return;
+  std::optional<double> latitude, longitude, altitude;
+  double latitude_sign = 1, longitude_sign = 1, altitude_sign = 1;
+  bool latitude_ref_valid = true, longitude_ref_valid = true;
+  for (uint64_t i = 0; i < num_entries; ++i) {
+    const uint64_t entry_offset = ifd_offset + 2 + i * kIfdEntrySize;
+    if (!reader.Contains(entry_offset, kIfdEntrySize)) break;
+    IfdEntry entry;
+    if (!ReadIfdEntry(reader, entry_offset, &entry)) continue;
+    switch (entry.tag) {
+      case kTagGpsLatitudeRef: {
+        const std::optional<std::string> ref = ReadAscii(reader, entry);
+        latitude_ref_valid = ref && (*ref == "N" || *ref == "S");
+        latitude_sign = ref && *ref == "S" ? -1 : 1;
+        break;
+      }
+      case kTagGpsLongitudeRef: {
+        const std::optional<std::string> ref = ReadAscii(reader, entry);
+        longitude_ref_valid = ref && (*ref == "E" || *ref == "W");
+        longitude_sign = ref && *ref == "W" ? -1 : 1;
+        break;
+      }
+      case kTagGpsLatitude: latitude = ReadDegrees(reader, entry); break;
+      case kTagGpsLongitude: longitude = ReadDegrees(reader, entry); break;
+      case kTagGpsAltitudeRef:
+        if (entry.type == kTypeByte && reader.Byte(entry.value_offset) == 1) altitude_sign = -1;
+        break;
+      case kTagGpsAltitude: altitude = ReadNumber(reader, entry); break;
+      default: break;
+    }
+  }
+  if (latitude && longitude && latitude_ref_valid && longitude_ref_valid &&
+      std::abs(*latitude) <= 90 && std::abs(*longitude) <= 180) {
+    exif->gps_latitude = latitude_sign * *latitude;
+    exif->gps_longitude = longitude_sign * *longitude;
+    if (altitude) exif->gps_altitude = altitude_sign * *altitude;
+  }
+}
+
 // Reads the tags we know from the IFD at `ifd_offset` into `exif`. Returns false when the IFD
 // header itself lies outside the block; entries that are malformed are skipped one by one.
 bool ParseIfd(const TiffReader& reader, uint64_t ifd_offset, ExifData* exif,
-              std::optional<uint32_t>* exif_ifd_offset) {
+              SubIfdOffsets* sub_ifd_offsets) {
   uint16_t num_entries = 0;
   if (!reader.ReadU16(ifd_offset, &num_entries)) return false;
   for (uint64_t i = 0; i < num_entries; ++i) {
@@ -205,9 +275,11 @@ bool ParseIfd(const TiffReader& reader, uint64_t ifd_offset, ExifData* exif,
         }
         break;
       case kTagExifIfdPointer:
-        if (exif_ifd_offset != nullptr && (entry.type == kTypeLong || entry.type == kTypeShort)) {
+      case kTagGpsIfdPointer:
+        if (sub_ifd_offsets != nullptr) {
           if (const auto value = ReadInteger(reader, entry)) {
-            *exif_ifd_offset = static_cast<uint32_t>(*value);
+            (entry.tag == kTagExifIfdPointer ? sub_ifd_offsets->exif : sub_ifd_offsets->gps) =
+                static_cast<uint32_t>(*value);
           }
         }
         break;
@@ -255,11 +327,12 @@ std::optional<ExifData> ParseExifTiff(std::string_view tiff) {
     return std::nullopt;
   }
   ExifData exif;
-  std::optional<uint32_t> exif_ifd_offset;
-  if (!ParseIfd(reader, ifd0_offset, &exif, &exif_ifd_offset)) return std::nullopt;
-  // The Exif IFD holds the focal tags. Only this one pointer is followed (no next-IFD chains),
-  // so a block whose offsets form a cycle cannot loop.
-  if (exif_ifd_offset) ParseIfd(reader, *exif_ifd_offset, &exif, nullptr);
+  SubIfdOffsets sub_ifd_offsets;
+  if (!ParseIfd(reader, ifd0_offset, &exif, &sub_ifd_offsets)) return std::nullopt;
+  // The Exif IFD holds the focal tags, the GPS IFD the position. Only these two pointers are
+  // followed (no next-IFD chains), so a block whose offsets form a cycle cannot loop.
+  if (sub_ifd_offsets.exif) ParseIfd(reader, *sub_ifd_offsets.exif, &exif, nullptr);
+  if (sub_ifd_offsets.gps) ParseGpsIfd(reader, *sub_ifd_offsets.gps, &exif);
   return exif;
 }
 

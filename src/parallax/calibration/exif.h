@@ -8,8 +8,9 @@
 
 namespace parallax {
 
-// The few EXIF fields that tell a camera's focal length. Every field is optional: cameras
-// write different subsets, and a malformed tag is dropped rather than failing the whole block.
+// The few EXIF fields that tell a camera's focal length and where it was. Every field is
+// optional: cameras write different subsets, and a malformed tag is dropped rather than
+// failing the whole block.
 struct ExifData {
   std::optional<std::string> make;                 // 0x010F, trailing NULs/spaces trimmed
   std::optional<std::string> model;                // 0x0110
@@ -20,6 +21,11 @@ struct ExifData {
   std::optional<int64_t> pixel_x_dimension;        // 0xA002 width the camera wrote
   std::optional<int64_t> pixel_y_dimension;        // 0xA003 height the camera wrote
   std::optional<int> orientation;                  // 0x0112 in IFD0: 1-8, 1 is upright
+  // GPS IFD (tag 0x8825): degrees, north and east positive (refs 'S' and 'W' negate), metres
+  // above sea level (AltitudeRef 1 negates). Latitude and longitude are kept only in pairs.
+  std::optional<double> gps_latitude;   // 0x0001 ref, 0x0002 3 RATIONALs (deg, min, sec)
+  std::optional<double> gps_longitude;  // 0x0003 ref, 0x0004
+  std::optional<double> gps_altitude;   // 0x0005 ref, 0x0006 RATIONAL
 };
 
 // Parses a TIFF-structured EXIF block ("II*\0" or "MM\0*" header, IFD0, then the Exif IFD that

@@ -6,6 +6,7 @@
 #include <set>
 #include <opencv2/core.hpp>
 
+#include "parallax/calibration/exif.h"
 #include "parallax/util/check.h"
 #include "parallax/util/content_hash.h"
 #include "parallax/util/interrupt.h"
@@ -47,8 +48,16 @@ struct ExtractionResult {
   FeatureKeypoints keypoints;
   FeatureDescriptors descriptors;
   ImageFileFingerprint fingerprint;
+  std::optional<GeodeticPosition> gps;  // From EXIF, when the file has a position.
   double hash_seconds = 0;
 };
+
+// The EXIF GPS position of a photo, if any (an unreadable EXIF block is no position).
+std::optional<GeodeticPosition> ReadGpsPosition(const std::filesystem::path& path) {
+  const std::optional<ExifData> exif = ReadExif(path);
+  if (!exif || !exif->gps_latitude || !exif->gps_longitude) return std::nullopt;
+  return GeodeticPosition{*exif->gps_latitude, *exif->gps_longitude, exif->gps_altitude.value_or(0.0)};
+}
 
 // Size and modification time of the file as it is now (no digest).
 ImageFileFingerprint StatImageFile(const std::filesystem::path& path) {
@@ -97,6 +106,7 @@ ExtractionResult ExtractImage(const ExtractionJob& job, const FeatureExtractionO
     result.height = static_cast<size_t>(bitmap.Height());
     // An extractor per image: cheap to create, and no state is shared between threads.
     CreateSiftExtractor(options.sift)->Extract(bitmap.gray, &result.keypoints, &result.descriptors);
+    result.gps = ReadGpsPosition(job.path);
   } catch (const CheckError&) {
     throw;  // A bug, not a bad file.
   } catch (const std::exception& error) {
@@ -214,7 +224,7 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
         return;
       }
       database->WriteImageWithFeatures(job.name, camera_id, result.keypoints, result.descriptors,
-                                       result.fingerprint);
+                                       result.fingerprint, result.gps);
     }
     if (job.image_id) database->WriteImageFileFingerprint(*job.image_id, result.fingerprint);
     stats.hash_thread_seconds += result.hash_seconds;

@@ -141,6 +141,7 @@ class Statement {
 
   void BindInt64(int index, int64_t value) { Check(sqlite3_bind_int64(stmt_, index, value)); }
   void BindNull(int index) { Check(sqlite3_bind_null(stmt_, index)); }
+  void BindDouble(int index, double value) { Check(sqlite3_bind_double(stmt_, index, value)); }
   // The text and blobs must outlive Step() (bound without copying).
   void BindText(int index, const std::string& text) {
     Check(sqlite3_bind_text(stmt_, index, text.c_str(), static_cast<int>(text.size()),
@@ -164,6 +165,7 @@ class Statement {
   }
 
   int64_t Int64(int column) const { return sqlite3_column_int64(stmt_, column); }
+  double Double(int column) const { return sqlite3_column_double(stmt_, column); }
   std::string Text(int column) const {
     const unsigned char* text = sqlite3_column_text(stmt_, column);
     return text == nullptr ? std::string() : std::string(reinterpret_cast<const char*>(text));
@@ -633,15 +635,39 @@ void Database::WriteDescriptors(image_t image_id, const FeatureDescriptors& desc
 image_t Database::WriteImageWithFeatures(const std::string& name, camera_t camera_id,
                                          const FeatureKeypoints& keypoints,
                                          const FeatureDescriptors& descriptors,
-                                         const std::optional<ImageFileFingerprint>& fingerprint) {
+                                         const std::optional<ImageFileFingerprint>& fingerprint,
+                                         const std::optional<GeodeticPosition>& gps_prior) {
   PARALLAX_CHECK_EQ(keypoints.size(), static_cast<size_t>(descriptors.rows()));
   ScopedTransaction transaction(db_, path_);
   const image_t image_id = WriteImage(name, camera_id);
   WriteKeypoints(image_id, keypoints);
   WriteDescriptors(image_id, descriptors);
   if (fingerprint) WriteImageFileFingerprint(image_id, *fingerprint);
+  if (gps_prior) WriteImageGpsPrior(image_id, *gps_prior);
   transaction.Commit();
   return image_id;
+}
+
+void Database::WriteImageGpsPrior(image_t image_id, const GeodeticPosition& position) {
+  Statement statement(db_, path_,
+                      "UPDATE images SET prior_tx = ?, prior_ty = ?, prior_tz = ? WHERE image_id = ?;");
+  statement.BindDouble(1, position.latitude);
+  statement.BindDouble(2, position.longitude);
+  statement.BindDouble(3, position.altitude);
+  statement.BindInt64(4, image_id);
+  statement.Step("cannot write an image's GPS prior");
+}
+
+std::vector<std::pair<image_t, GeodeticPosition>> Database::ReadImageGpsPriors() const {
+  Statement statement(db_, path_,
+                      "SELECT image_id, prior_tx, prior_ty, prior_tz FROM images WHERE prior_tx IS "
+                      "NOT NULL AND prior_ty IS NOT NULL ORDER BY image_id;");
+  std::vector<std::pair<image_t, GeodeticPosition>> priors;
+  while (statement.Step()) {
+    const GeodeticPosition position{statement.Double(1), statement.Double(2), statement.Double(3)};
+    priors.emplace_back(static_cast<image_t>(statement.Int64(0)), position);
+  }
+  return priors;
 }
 
 void Database::WriteImageFileFingerprint(image_t image_id, const ImageFileFingerprint& fingerprint) {

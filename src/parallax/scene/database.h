@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "parallax/feature/types.h"
+#include "parallax/geometry/gps.h"
 #include "parallax/scene/camera.h"
 #include "parallax/scene/image.h"
 #include "parallax/scene/two_view_geometry.h"
@@ -61,7 +62,13 @@ class Database {
   image_t WriteImageWithFeatures(const std::string& name, camera_t camera_id,
                                  const FeatureKeypoints& keypoints,
                                  const FeatureDescriptors& descriptors,
-                                 const std::optional<ImageFileFingerprint>& fingerprint = {});
+                                 const std::optional<ImageFileFingerprint>& fingerprint = {},
+                                 const std::optional<GeodeticPosition>& gps_prior = {});
+  // The image's GPS position (EXIF), where COLMAP keeps it: prior_tx, prior_ty, prior_tz hold
+  // latitude, longitude and altitude, so COLMAP's spatial matcher reads it too.
+  void WriteImageGpsPrior(image_t image_id, const GeodeticPosition& position);
+  // Every image with a GPS prior.
+  std::vector<std::pair<image_t, GeodeticPosition>> ReadImageGpsPriors() const;
   void WriteImageFileFingerprint(image_t image_id, const ImageFileFingerprint& fingerprint);
   // Nullopt for images stored by COLMAP or by a Parallax before fingerprints.
   std::optional<ImageFileFingerprint> ReadImageFileFingerprint(image_t image_id) const;
