@@ -17,33 +17,6 @@
 namespace parallax::cli {
 namespace {
 
-// "8x6" -> (8, 6); false unless two positive integers joined by 'x' or 'X'.
-bool ParseDimensions(const std::string& text, int* first, int* second) {
-  const size_t separator = text.find_first_of("xX");
-  if (separator == std::string::npos || separator == 0 || separator + 1 == text.size()) {
-    return false;
-  }
-  const std::string a = text.substr(0, separator), b = text.substr(separator + 1);
-  const auto all_digits = [](const std::string& part) {
-    return part.size() <= 6 &&
-           std::all_of(part.begin(), part.end(), [](unsigned char c) { return std::isdigit(c); });
-  };
-  if (!all_digits(a) || !all_digits(b)) return false;
-  *first = std::stoi(a);
-  *second = std::stoi(b);
-  return *first > 0 && *second > 0;
-}
-
-CLI::Validator DimensionsValidator(const std::string& example) {
-  return CLI::Validator(
-      [example](std::string& text) -> std::string {
-        int first = 0, second = 0;
-        if (ParseDimensions(text, &first, &second)) return "";
-        return "expected two positive integers like " + example + ", got '" + text + "'";
-      },
-      "AxB");
-}
-
 // Image files of `dir` by extension (decoding tells the rest), sorted by name.
 std::vector<std::filesystem::path> ListCalibrationImages(const std::filesystem::path& dir) {
   static const std::set<std::string> kExtensions = {".jpg", ".jpeg", ".png",

@@ -1,5 +1,7 @@
 #include "parallax/cli/cli_common.h"
 
+#include <algorithm>
+#include <cctype>
 #include <csignal>
 #include <exception>
 #include <iostream>
@@ -10,6 +12,34 @@
 #include "parallax/util/logging.h"
 
 namespace parallax::cli {
+
+// "8x6" -> (8, 6); false unless two positive integers joined by 'x' or 'X'.
+bool ParseDimensions(const std::string& text, int* first, int* second) {
+  const size_t separator = text.find_first_of("xX");
+  if (separator == std::string::npos || separator == 0 || separator + 1 == text.size()) {
+    return false;
+  }
+  const std::string a = text.substr(0, separator), b = text.substr(separator + 1);
+  const auto all_digits = [](const std::string& part) {
+    return part.size() <= 6 &&
+           std::all_of(part.begin(), part.end(), [](unsigned char c) { return std::isdigit(c); });
+  };
+  if (!all_digits(a) || !all_digits(b)) return false;
+  *first = std::stoi(a);
+  *second = std::stoi(b);
+  return *first > 0 && *second > 0;
+}
+
+CLI::Validator DimensionsValidator(const std::string& example) {
+  return CLI::Validator(
+      [example](std::string& text) -> std::string {
+        int first = 0, second = 0;
+        if (ParseDimensions(text, &first, &second)) return "";
+        return "expected two positive integers like " + example + ", got '" + text + "'";
+      },
+      "AxB");
+}
+
 
 void AddVerbosityFlags(CLI::App& app, VerbosityFlags* flags) {
   app.add_flag("-q,--quiet", flags->quiet, "Print only warnings and errors");

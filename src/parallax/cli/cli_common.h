@@ -6,6 +6,11 @@
 
 namespace parallax::cli {
 
+// "8x6" -> (8, 6); false unless two positive integers joined by 'x' or 'X'.
+bool ParseDimensions(const std::string& text, int* first, int* second);
+// A CLI11 check that the value parses with ParseDimensions; `example` goes in its message.
+CLI::Validator DimensionsValidator(const std::string& example);
+
 // Adds --quiet / --verbose to a subcommand; applied by RunCommand.
 struct VerbosityFlags {
   bool quiet = false;

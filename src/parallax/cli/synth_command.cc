@@ -19,10 +19,22 @@ int RunSynth(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(2, 100000));
   app.add_option("--layout", layout,
-                 "ring (around one temple), hemisphere (a spiral above it) or sequence (a walk "
-                 "past a row of temples, for sequential matching)")
+                 "ring (around one temple), hemisphere (a spiral above it), sequence (a walk "
+                 "past a row of temples, for sequential matching) or aerial (a drone survey of a "
+                 "town in strips: JPEG with EXIF focal length and GPS, gt/overlap_pairs.txt)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"ring", "hemisphere", "sequence"}));
+      ->check(CLI::IsMember({"ring", "hemisphere", "sequence", "aerial"}));
+  app.add_option("--oblique", options.oblique_fraction,
+                 "aerial: share of the views tilted 30 degrees off nadir")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--gps-noise", options.gps_noise,
+                 "aerial: standard deviation in metres of the EXIF GPS noise (twice that in height)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  std::string image_size;
+  app.add_option("--image-size", image_size, "Image size WxH (sets --width and --height)")
+      ->check(DimensionsValidator("640x480"));
   app.add_option("--width", options.width, "Image width in pixels")
       ->capture_default_str()
       ->check(CLI::Range(16, 20000));
@@ -53,6 +65,7 @@ int RunSynth(int argc, char** argv) {
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
     options.layout = SyntheticSceneLayoutFromName(layout);
+    if (!image_size.empty()) ParseDimensions(image_size, &options.width, &options.height);
     options.antialiasing = antialiasing == "none"       ? Antialiasing::kNone
                            : antialiasing == "grid3x3" ? Antialiasing::kGrid3x3
                                                        : Antialiasing::kQuincunx;

@@ -164,4 +164,30 @@ Eigen::Vector3f RoofTileAlbedo(const Eigen::Vector2f& p, uint32_t seed, float fo
   return Mix(color, Eigen::Vector3f(0.18f, 0.1f, 0.08f), joint);
 }
 
+Eigen::Vector3f AsphaltAlbedo(const Eigen::Vector2f& p, float along, float across, uint32_t seed,
+                              float footprint) {
+  Eigen::Vector3f color = Eigen::Vector3f(0.3f, 0.3f, 0.31f);
+  color *= Detail(p, seed + 1, 3.0f, 8, footprint, 1.2f);
+  color = Speckle(p, seed + 2, footprint, 0.5f, color, Eigen::Vector3f(0.15f, 0.15f, 0.15f),
+                  Eigen::Vector3f(0.55f, 0.55f, 0.53f));
+  // The centre line: 3 m dashes every 6 m, 15 cm wide.
+  const float dash = SmoothStep(0.0f, 0.2f, 1.5f - std::abs(std::fmod(std::abs(along), 6.0f) - 3.0f));
+  const float width = LodWeight(0.3f, footprint) * (1.0f - SmoothStep(0.06f, 0.09f, std::abs(across)));
+  return Mix(color, Eigen::Vector3f(0.88f, 0.86f, 0.8f), dash * width);
+}
+
+Eigen::Vector3f FieldAlbedo(const Eigen::Vector2f& p, uint32_t crop_seed, uint32_t seed, float footprint) {
+  const float spacing = 0.6f + 0.8f * UnitFloat(Mix32(crop_seed + 11));
+  const Eigen::Vector3f soil(0.5f, 0.4f, 0.28f);
+  const Eigen::Vector3f crop = Mix(Eigen::Vector3f(0.35f, 0.5f, 0.2f), Eigen::Vector3f(0.72f, 0.64f, 0.33f),
+                                   UnitFloat(Mix32(crop_seed + 12)));
+  // Rows along u: a soft stripe per row, fading to the mean colour when rows are sub-pixel.
+  const float row = 0.5f + 0.5f * std::cos(2.0f * std::numbers::pi_v<float> * p.y() / spacing);
+  const float lod = LodWeight(spacing, footprint);
+  Eigen::Vector3f color = Mix(soil, crop, 0.55f + lod * (SmoothStep(0.3f, 0.7f, row) - 0.5f));
+  color *= Detail(p, seed + 1, 6.0f, 9, footprint, 1.6f);
+  return Speckle(p, seed + 2, footprint, 0.7f, color, Eigen::Vector3f(0.2f, 0.2f, 0.12f),
+                 Eigen::Vector3f(0.8f, 0.78f, 0.6f));
+}
+
 }  // namespace parallax

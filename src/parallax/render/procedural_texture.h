@@ -77,5 +77,12 @@ Eigen::Vector3f MarbleAlbedo(const Eigen::Vector2f& p, uint32_t seed, float foot
 Eigen::Vector3f ColumnAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint, float radius);
 Eigen::Vector3f AshlarAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint);
 Eigen::Vector3f RoofTileAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint);
+// Albedos of the town seen from the air. Asphalt textured at `p`, with a dashed centre line
+// where `across` (metres from the street's axis) is 0, dashes by `along`.
+Eigen::Vector3f AsphaltAlbedo(const Eigen::Vector2f& p, float along, float across, uint32_t seed,
+                              float footprint);
+// A ploughed or planted field: rows along u, their spacing and colour from `crop_seed`, the
+// soil's detail from `seed`.
+Eigen::Vector3f FieldAlbedo(const Eigen::Vector2f& p, uint32_t crop_seed, uint32_t seed, float footprint);
 
 }  // namespace parallax

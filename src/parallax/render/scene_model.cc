@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <random>
 
 #include "parallax/render/procedural_texture.h"
 #include "parallax/util/check.h"
@@ -27,6 +28,11 @@ constexpr double kArchitraveTop = 5.6;
 // Half extent of the paved plaza around a temple.
 constexpr double kPlazaHalfX = 11.0;
 constexpr double kPlazaHalfY = 8.5;
+// Town blocks: pitch (street centre to street centre) and street width, in metres.
+constexpr double kBlockPitch = 48.0;
+constexpr double kStreetWidth = 8.0;
+// Roofs and fields come in this many textures each.
+constexpr uint32_t kNumRepeatedTextures = 4;
 
 // Entry and exit distances of a ray through a box (inv_direction = 1 / direction).
 inline bool SlabTest(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& origin,
@@ -44,18 +50,87 @@ inline bool SlabTest(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& orig
 void SceneModelOptions::Check() const {
   PARALLAX_CHECK_GE(num_temples, 1);
   PARALLAX_CHECK_GT(temple_spacing, 2 * kPlazaHalfX * 0.7);
+  PARALLAX_CHECK_GT(town_half_size, 0.0);
 }
 
 SceneModel::SceneModel(const SceneModelOptions& options) : options_(options) {
   options_.Check();
   next_texture_seed_ = static_cast<uint32_t>(options_.seed * 0x9E3779B97F4A7C15ull >> 32) ^
                        static_cast<uint32_t>(options_.seed);
-  for (int k = 0; k < options_.num_temples; ++k) AddTemple(k);
+  layout_seed_ = Mix32(next_texture_seed_ ^ 0x7A3B9C1Du);
+  if (options_.kind == SceneModelOptions::Kind::kTown) {
+    options_.num_temples = 1;  // The ground disc is centred on temple 0's place, the origin.
+    AddTown();
+    ground_radius_ = std::sqrt(2.0) * options_.town_half_size + 300.0;
+  } else {
+    for (int k = 0; k < options_.num_temples; ++k) AddTemple(k);
+    ground_radius_ = 0.5 * (options_.num_temples - 1) * options_.temple_spacing + 250.0;
+  }
   bounds_.setEmpty();
   for (const Primitive& primitive : primitives_) bounds_.extend(primitive.box);
-  ground_radius_ = 0.5 * (options_.num_temples - 1) * options_.temple_spacing + 250.0;
   nodes_.reserve(2 * primitives_.size());
   BuildNode(0, static_cast<int>(primitives_.size()));
+}
+
+std::vector<Eigen::Vector3d> SceneModel::SampleSurfacePoints(double spacing,
+                                                             const Eigen::AlignedBox2d& ground_region,
+                                                             uint64_t seed) const {
+  PARALLAX_CHECK_GT(spacing, 0.0);
+  std::mt19937_64 engine(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Eigen::Vector3d> points;
+  // A jittered grid on a parallelogram `origin + s * edge1 + t * edge2`, s, t in [0, 1];
+  // `triangle` keeps the half with s + t <= 1.
+  const auto sample_patch = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& edge1,
+                                const Eigen::Vector3d& edge2, bool triangle) {
+    const int n1 = std::max(1, static_cast<int>(std::ceil(edge1.norm() / spacing)));
+    const int n2 = std::max(1, static_cast<int>(std::ceil(edge2.norm() / spacing)));
+    for (int i = 0; i < n1; ++i) {
+      for (int j = 0; j < n2; ++j) {
+        const double s = (i + unit(engine)) / n1, t = (j + unit(engine)) / n2;
+        if (triangle && s + t > 1.0) continue;
+        points.push_back(origin + s * edge1 + t * edge2);
+      }
+    }
+  };
+  if (!ground_region.isEmpty()) {
+    const Eigen::Vector2d size = ground_region.sizes();
+    sample_patch(Eigen::Vector3d(ground_region.min().x(), ground_region.min().y(), 0.0),
+                 Eigen::Vector3d(size.x(), 0.0, 0.0), Eigen::Vector3d(0.0, size.y(), 0.0), false);
+  }
+  for (const Primitive& primitive : primitives_) {
+    switch (primitive.shape) {
+      case Shape::kBox: {
+        const Eigen::Vector3d& lo = primitive.box.min();
+        const Eigen::Vector3d size = primitive.box.sizes();
+        const Eigen::Vector3d x(size.x(), 0, 0), y(0, size.y(), 0), z(0, 0, size.z());
+        sample_patch(lo + z, x, y, false);  // Top.
+        sample_patch(lo, x, z, false);
+        sample_patch(lo + y, x, z, false);
+        sample_patch(lo, y, z, false);
+        sample_patch(lo + x, y, z, false);
+        break;
+      }
+      case Shape::kCylinder: {
+        const double height = primitive.box.sizes().z();
+        const int n = std::max(3, static_cast<int>(std::ceil(2 * std::numbers::pi * primitive.radius / spacing)));
+        const int m = std::max(1, static_cast<int>(std::ceil(height / spacing)));
+        for (int i = 0; i < n; ++i) {
+          for (int j = 0; j < m; ++j) {
+            const double angle = 2 * std::numbers::pi * (i + unit(engine)) / n;
+            points.emplace_back(primitive.center.x() + primitive.radius * std::cos(angle),
+                                primitive.center.y() + primitive.radius * std::sin(angle),
+                                primitive.box.min().z() + height * (j + unit(engine)) / m);
+          }
+        }
+        break;
+      }
+      case Shape::kTriangle:
+        sample_patch(primitive.vertex, primitive.edge1, primitive.edge2, true);
+        break;
+    }
+  }
+  return points;
 }
 
 Eigen::Vector3d SceneModel::TempleCenter(int temple_idx) const {
@@ -121,6 +196,86 @@ void SceneModel::AddTemple(int temple_idx) {
   }
 }
 
+bool SceneModel::IsFieldBlock(int bx, int by) const {
+  return UnitFloat(HashCell(bx, by, layout_seed_ ^ 0xF1E1D5u)) < 0.3f;
+}
+
+void SceneModel::AddTown() {
+  const int num_blocks = static_cast<int>(std::ceil(options_.town_half_size / kBlockPitch));
+  // Repeated textures are drawn from the seed once, so every copy is the same.
+  const uint32_t roof_seed = Mix32(layout_seed_ ^ 0x0F00Fu);
+  for (int by = -num_blocks; by < num_blocks; ++by) {
+    for (int bx = -num_blocks; bx < num_blocks; ++bx) {
+      if (IsFieldBlock(bx, by)) continue;
+      const Eigen::Vector2d block_min(bx * kBlockPitch + kStreetWidth, by * kBlockPitch + kStreetWidth);
+      const double lot_size = 0.5 * (kBlockPitch - kStreetWidth);
+      for (int lot = 0; lot < 4; ++lot) {
+        uint32_t h = HashCell(2 * bx + lot % 2, 2 * by + lot / 2, layout_seed_ ^ 0xB0115u);
+        if (UnitFloat(h) < 0.15f) continue;  // An empty lot.
+        const int type = static_cast<int>((h = Mix32(h)) % 3);
+        // Houses of three sizes (x by y by wall height); type 2 is a flat-roofed block.
+        const double sizes[3][3] = {{10.0, 8.0, 4.0}, {13.0, 9.0, 5.5}, {15.0, 12.0, 11.0}};
+        const bool rotated = (Mix32(h + 1) & 1) != 0;
+        const double size_x = sizes[type][rotated ? 1 : 0], size_y = sizes[type][rotated ? 0 : 1];
+        const double wall_height = sizes[type][2];
+        const Eigen::Vector2d lot_min = block_min + lot_size * Eigen::Vector2d(lot % 2, lot / 2);
+        const Eigen::Vector2d slack(lot_size - 2.0 - size_x, lot_size - 2.0 - size_y);
+        const Eigen::Vector2d min =
+            lot_min + Eigen::Vector2d(1.0 + slack.x() * UnitFloat(Mix32(h + 2)),
+                                      1.0 + slack.y() * UnitFloat(Mix32(h + 3)));
+        const Eigen::Vector3d low(min.x(), min.y(), 0.0);
+        const Eigen::Vector3d high(min.x() + size_x, min.y() + size_y, wall_height);
+        AddBox(low, high, Material::kWall);
+        if (type == 2) continue;
+        // A gabled roof, ridge along the longer side, textured in the roof's own frame: the
+        // tiles of every roof line up the same way, their weathering is the house's own.
+        const uint32_t texture = Mix32(roof_seed + Mix32(h + 4));
+        const double ridge_height = wall_height + 0.35 * std::min(size_x, size_y);
+        const Eigen::Vector3d along = size_x >= size_y ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+        const Eigen::Vector3d across = size_x >= size_y ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
+        const double length = size_x >= size_y ? size_x : size_y, width = size_x >= size_y ? size_y : size_x;
+        const Eigen::Vector3d eave0(low.x(), low.y(), wall_height);
+        const Eigen::Vector3d ridge0 = eave0 + 0.5 * width * across + (ridge_height - wall_height) * Eigen::Vector3d::UnitZ();
+        for (const double side : {0.0, 1.0}) {
+          const Eigen::Vector3d a = eave0 + side * width * across;
+          const Eigen::Vector3d b = a + length * along;
+          AddTriangle(a, b, ridge0 + length * along, along, Material::kRoof, a, texture);
+          AddTriangle(a, ridge0 + length * along, ridge0, along, Material::kRoof, a, texture);
+          // The gable ends.
+          const Eigen::Vector3d end = eave0 + side * length * along;
+          AddTriangle(end, end + width * across, ridge0 + side * length * along, across, Material::kWall);
+        }
+      }
+    }
+  }
+}
+
+Eigen::Vector3f SceneModel::TownGroundAlbedo(const SurfaceHit& hit, float footprint) const {
+  const double x = hit.point.x(), y = hit.point.y();
+  const int bx = static_cast<int>(std::floor(x / kBlockPitch)), by = static_cast<int>(std::floor(y / kBlockPitch));
+  const Eigen::Vector2f local(static_cast<float>(x - bx * kBlockPitch), static_cast<float>(y - by * kBlockPitch));
+  if (local.x() < kStreetWidth || local.y() < kStreetWidth) {
+    // Streets along x where local y is small, along y otherwise; v is across the street.
+    const float half = 0.5f * static_cast<float>(kStreetWidth);
+    const bool along_x = local.y() < kStreetWidth && (local.x() >= kStreetWidth || local.y() < local.x());
+    // Texture in world coordinates: no two streets alike but for their markings.
+    return along_x ? AsphaltAlbedo(hit.uv.cast<float>(), static_cast<float>(x), local.y() - half,
+                                   hit.texture_seed, footprint)
+                   : AsphaltAlbedo(hit.uv.cast<float>(), static_cast<float>(y), local.x() - half,
+                                   hit.texture_seed, footprint);
+  }
+  const uint32_t block = HashCell(bx, by, hit.texture_seed);
+  if (IsFieldBlock(bx, by)) {
+    // One of four crops (row spacing and colour) in the block's own frame (rows along x or
+    // y); the soil's detail is the block's own, as no two real fields are pixel copies.
+    const uint32_t crop = Mix32(hit.texture_seed + block % kNumRepeatedTextures);
+    const Eigen::Vector2f uv = (crop & 1) ? local : Eigen::Vector2f(local.y(), local.x());
+    const float tone = 0.9f + 0.2f * Fbm(hit.uv.cast<float>(), hit.texture_seed + 5, 90.0f, 2, footprint);
+    return tone * FieldAlbedo(uv, crop, Mix32(block), footprint);
+  }
+  return EarthAlbedo(hit.uv.cast<float>(), hit.texture_seed, footprint);
+}
+
 void SceneModel::AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Material material) {
   Primitive primitive;
   primitive.shape = Shape::kBox;
@@ -144,11 +299,13 @@ void SceneModel::AddCylinder(const Eigen::Vector2d& center, double radius, doubl
 }
 
 void SceneModel::AddTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                             const Eigen::Vector3d& u_direction, Material material) {
+                             const Eigen::Vector3d& u_direction, Material material,
+                             const Eigen::Vector3d& uv_origin, std::optional<uint32_t> texture_seed) {
   Primitive primitive;
   primitive.shape = Shape::kTriangle;
   primitive.material = material;
-  primitive.texture_seed = Mix32(next_texture_seed_++);
+  primitive.texture_seed = texture_seed ? *texture_seed : Mix32(next_texture_seed_++);
+  primitive.uv_origin = uv_origin;
   primitive.vertex = a;
   primitive.edge1 = b - a;
   primitive.edge2 = c - a;
@@ -260,7 +417,8 @@ bool SceneModel::IntersectPrimitive(const Primitive& primitive, const Eigen::Vec
       if (hit == nullptr) return true;
       normal = primitive.normal.dot(direction) < 0 ? primitive.normal : Eigen::Vector3d(-primitive.normal);
       const Eigen::Vector3d point = origin + t * direction;
-      uv = Eigen::Vector2d(point.dot(primitive.axis_u), point.dot(primitive.axis_v));
+      const Eigen::Vector3d from_origin = point - primitive.uv_origin;
+      uv = Eigen::Vector2d(from_origin.dot(primitive.axis_u), from_origin.dot(primitive.axis_v));
       break;
     }
   }
@@ -360,6 +518,7 @@ Eigen::Vector3f SceneModel::Albedo(const SurfaceHit& hit, double footprint) cons
   const float fp = static_cast<float>(std::max(footprint, 1e-5));
   switch (hit.material) {
     case Material::kGround: {
+      if (options_.kind == SceneModelOptions::Kind::kTown) return TownGroundAlbedo(hit, fp);
       // Paved plaza around the nearest temple, earth and grass elsewhere.
       const int nearest = std::clamp(
           static_cast<int>(std::lround(hit.point.x() / options_.temple_spacing)), 0, options_.num_temples - 1);

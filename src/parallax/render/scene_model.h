@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace parallax {
@@ -11,7 +12,15 @@ namespace parallax {
 enum class Material : uint8_t { kGround, kStone, kColumn, kWall, kRoof };
 
 struct SceneModelOptions {
-  // Number of temples, in a row along world +x (a long row for long sequences).
+  // What stands on the ground.
+  enum class Kind {
+    kTemples,  // a row of temples on a plaza (ring, hemisphere and sequence views)
+    kTown,     // a street grid of houses, apartment blocks and fields (aerial surveys)
+  };
+  Kind kind = Kind::kTemples;
+  // kTown: half the side in metres of the square of streets centred at the origin.
+  double town_half_size = 150.0;
+  // kTemples: number of temples, in a row along world +x (a long row for long sequences).
   int num_temples = 1;
   // Distance in metres between the centres of neighbouring temples.
   double temple_spacing = 18.0;
@@ -43,6 +52,12 @@ struct SurfaceHit {
 // surface point and the seed, rich from metres down to centimetres (fractal value noise,
 // blocks, veins, speckles) so that SIFT finds stable keypoints on every surface; they fade
 // detail finer than the pixel footprint (anti-aliasing and speed).
+//
+// The town (Kind::kTown) is a grid of 48 m blocks between 8 m streets. A block is a field
+// (crop rows) or holds up to four buildings: houses with gabled roofs and flat-roofed blocks.
+// Like real surveys it repeats itself: houses come in three sizes, roofs and fields in four
+// textures each, laid out in the building's own coordinates, so that many roofs and fields
+// look exactly alike and only their surroundings tell them apart.
 class SceneModel {
  public:
   explicit SceneModel(const SceneModelOptions& options = {});
@@ -59,6 +74,12 @@ class SceneModel {
   Eigen::Vector3f Albedo(const SurfaceHit& hit, double footprint) const;
   // Colour of the sky in a direction.
   static Eigen::Vector3f SkyColor(const Eigen::Vector3d& direction);
+
+  // Points about `spacing` metres apart on every surface: a jittered grid on the ground
+  // inside `ground_region` (x, y), and on each primitive's faces but the bottom ones. The
+  // ground truth of which views see the same part of the scene. Deterministic for a seed.
+  std::vector<Eigen::Vector3d> SampleSurfacePoints(double spacing, const Eigen::AlignedBox2d& ground_region,
+                                                   uint64_t seed) const;
 
   const SceneModelOptions& Options() const { return options_; }
   // Centre of temple k at ground level.
@@ -87,6 +108,7 @@ class SceneModel {
     Eigen::Vector3d edge1 = Eigen::Vector3d::Zero(), edge2 = Eigen::Vector3d::Zero();
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     Eigen::Vector3d axis_u = Eigen::Vector3d::Zero(), axis_v = Eigen::Vector3d::Zero();
+    Eigen::Vector3d uv_origin = Eigen::Vector3d::Zero();
   };
   // A bounding volume hierarchy node: an inner node has two children, a leaf a range.
   struct Node {
@@ -96,12 +118,19 @@ class SceneModel {
   };
 
   void AddTemple(int temple_idx);
+  void AddTown();
+  // Whether town block (bx, by) is a field rather than built on.
+  bool IsFieldBlock(int bx, int by) const;
+  Eigen::Vector3f TownGroundAlbedo(const SurfaceHit& hit, float footprint) const;
   void AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Material material);
   void AddCylinder(const Eigen::Vector2d& center, double radius, double z_min, double z_max,
                    Material material);
-  // Texture u runs along `u_direction` projected into the triangle's plane.
+  // Texture u runs along `u_direction` projected into the triangle's plane, from
+  // `uv_origin`. A fixed `texture_seed` (instead of a fresh one) repeats a texture.
   void AddTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                   const Eigen::Vector3d& u_direction, Material material);
+                   const Eigen::Vector3d& u_direction, Material material,
+                   const Eigen::Vector3d& uv_origin = Eigen::Vector3d::Zero(),
+                   std::optional<uint32_t> texture_seed = std::nullopt);
   int BuildNode(int first, int count);
   // Distance to the primitive (or +inf); fills the hit when not null and nearer.
   bool IntersectPrimitive(const Primitive& primitive, const Eigen::Vector3d& origin,
@@ -117,6 +146,8 @@ class SceneModel {
   Eigen::AlignedBox3d bounds_;
   double ground_radius_ = 0.0;
   uint32_t next_texture_seed_ = 0;
+  // Fixed at construction (unlike next_texture_seed_): where the town's fields and houses are.
+  uint32_t layout_seed_ = 0;
 };
 
 }  // namespace parallax

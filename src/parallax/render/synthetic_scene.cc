@@ -8,7 +8,9 @@
 #include <ostream>
 #include <random>
 
+#include "parallax/calibration/exif_writer.h"
 #include "parallax/feature/image_codecs.h"
+#include "parallax/render/covisibility.h"
 #include "parallax/render/procedural_texture.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -22,6 +24,84 @@ namespace {
 constexpr double kDegrees = std::numbers::pi / 180.0;
 // Distance between consecutive views of the sequence, in metres.
 constexpr double kSequenceStep = 0.6;
+// The aerial survey at the default focal length: flying height, and the share of an image
+// that overlaps the next one along a strip and the neighbouring strip.
+constexpr double kSurveyAltitude = 60.0;
+constexpr double kForwardOverlap = 0.8;
+constexpr double kSideOverlap = 0.65;
+constexpr double kObliqueTilt = 30.0;
+
+// Camera axes from a viewing direction and the world direction that should point up in the
+// image (it need not be orthogonal to `forward`): x right, y down, z forward.
+Rigid3d CameraLooking(const Eigen::Vector3d& center, const Eigen::Vector3d& forward,
+                      const Eigen::Vector3d& image_up) {
+  const Eigen::Vector3d z = forward.normalized();
+  const Eigen::Vector3d y = -(image_up - image_up.dot(z) * z).normalized();
+  Eigen::Matrix3d rotation;
+  rotation.row(0) = y.cross(z).transpose();
+  rotation.row(1) = y.transpose();
+  rotation.row(2) = z.transpose();
+  return Rigid3d(rotation, -rotation * center);
+}
+
+// Strips of the survey: the views fill strips flown back and forth along y, enough strips
+// that the surveyed area is about square.
+struct SurveyPlan {
+  int num_strips = 1;
+  int views_per_strip = 1;
+  double strip_spacing = 0.0;  // metres between strips (x)
+  double view_spacing = 0.0;   // metres between views along a strip (y)
+
+  SurveyPlan(const SyntheticSceneOptions& options, double zoom) {
+    const double altitude = kSurveyAltitude * zoom;
+    const double focal_length = options.EffectiveFocalLength();
+    strip_spacing = (1.0 - kSideOverlap) * altitude * options.width / focal_length;
+    view_spacing = (1.0 - kForwardOverlap) * altitude * options.height / focal_length;
+    num_strips = std::max(1, static_cast<int>(std::lround(
+                                 std::sqrt(options.num_views * view_spacing / strip_spacing))));
+    views_per_strip = (options.num_views + num_strips - 1) / num_strips;
+    num_strips = (options.num_views + views_per_strip - 1) / views_per_strip;
+  }
+  Eigen::Vector2d HalfExtent() const {
+    return 0.5 * Eigen::Vector2d((num_strips - 1) * strip_spacing, (views_per_strip - 1) * view_spacing);
+  }
+};
+
+// Poses of the aerial survey in flight order: nadir views, a share tilted, small attitude and
+// position errors as a drone's.
+std::vector<Rigid3d> AerialSurveyPoses(const SyntheticSceneOptions& options, double zoom,
+                                       std::mt19937_64* engine) {
+  const SurveyPlan plan(options, zoom);
+  const Eigen::Vector2d half = plan.HalfExtent();
+  const auto jitter = [engine](double stddev) {
+    return std::normal_distribution<double>(0.0, stddev)(*engine);
+  };
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Rigid3d> poses;
+  for (int i = 0; i < options.num_views; ++i) {
+    const int strip = i / plan.views_per_strip, step = i % plan.views_per_strip;
+    // Back and forth: odd strips fly south, so their images are upside down to even ones.
+    const bool northwards = strip % 2 == 0;
+    const double y = (northwards ? step : plan.views_per_strip - 1 - step) * plan.view_spacing - half.y();
+    const Eigen::Vector3d center(strip * plan.strip_spacing - half.x() + jitter(0.7),
+                                 y + jitter(0.7), kSurveyAltitude * zoom + jitter(1.0));
+    const double heading = (northwards ? 90.0 : -90.0) + jitter(3.0);
+    const Eigen::Vector3d flight(std::cos(heading * kDegrees), std::sin(heading * kDegrees), 0.0);
+    // About 1.7 degrees of attitude error on the gimbal.
+    const Eigen::Vector3d attitude_error(jitter(0.03), jitter(0.03), 0.0);
+    Eigen::Vector3d forward = Eigen::Vector3d(0, 0, -1) + attitude_error;
+    if (unit(*engine) < options.oblique_fraction) {
+      // Tilted towards one of the four directions relative to the flight.
+      const int side = static_cast<int>(4 * unit(*engine)) % 4;
+      const Eigen::Vector3d left(-flight.y(), flight.x(), 0.0);
+      const Eigen::Vector3d toward = side == 0 ? flight : side == 1 ? -flight : side == 2 ? left : -left;
+      forward = std::cos(kObliqueTilt * kDegrees) * Eigen::Vector3d(0, 0, -1) +
+                std::sin(kObliqueTilt * kDegrees) * toward + attitude_error;
+    }
+    poses.push_back(CameraLooking(center, forward, flight));
+  }
+  return poses;
+}
 
 // cam_from_world of a camera at `center` looking at `target`: x right, y down, image up
 // towards world +z.
@@ -36,9 +116,9 @@ Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
   return Rigid3d(rotation, -rotation * center);
 }
 
-std::string ViewName(int view_idx) {
+std::string ViewName(int view_idx, bool aerial) {
   char name[32];
-  std::snprintf(name, sizeof(name), "view_%04d.png", view_idx + 1);
+  std::snprintf(name, sizeof(name), aerial ? "IMG_%05d.jpg" : "view_%04d.png", view_idx + 1);
   return name;
 }
 
@@ -52,6 +132,27 @@ void WriteMatrixRow(std::ostream& stream, const Eigen::Matrix3d& matrix) {
   }
 }
 
+// What a drone writes into its JPEGs: focal length in mm with the sensor's size (as focal
+// plane resolution) and the 35 mm equivalent, pixel size, GPS position.
+ExifData AerialViewExif(const SyntheticSceneOptions& options, const Camera& camera, const Image& image) {
+  constexpr double kSensorWidthMm = 6.4;
+  ExifData exif;
+  exif.make = "Parallax";
+  exif.model = "synth aerial";
+  exif.focal_length_mm = camera.FocalLengthX() * kSensorWidthMm / camera.width;
+  exif.focal_plane_x_resolution = camera.width / (0.1 * kSensorWidthMm);  // pixels per cm
+  exif.focal_plane_resolution_unit = 3;
+  exif.focal_length_35mm = camera.FocalLengthX() * 36.0 / std::max(camera.width, camera.height);
+  exif.pixel_x_dimension = camera.width;
+  exif.pixel_y_dimension = camera.height;
+  const GeodeticPosition gps =
+      SyntheticGpsPosition(options, image.image_id, ProjectionCenter(image.cam_from_world));
+  exif.gps_latitude = gps.latitude;
+  exif.gps_longitude = gps.longitude;
+  exif.gps_altitude = gps.altitude;
+  return exif;
+}
+
 }  // namespace
 
 void SyntheticSceneOptions::Check() const {
@@ -63,6 +164,9 @@ void SyntheticSceneOptions::Check() const {
   PARALLAX_CHECK_GE(blur_sigma, 0.0);
   PARALLAX_CHECK_GE(lighting_variation, 0.0);
   PARALLAX_CHECK_LE(lighting_variation, 1.0);
+  PARALLAX_CHECK_GE(oblique_fraction, 0.0);
+  PARALLAX_CHECK_LE(oblique_fraction, 1.0);
+  PARALLAX_CHECK_GE(gps_noise, 0.0);
   PARALLAX_CHECK(!name.empty());
 }
 
@@ -70,7 +174,8 @@ SyntheticSceneOptions::Layout SyntheticSceneLayoutFromName(const std::string& na
   if (name == "ring") return SyntheticSceneOptions::Layout::kRing;
   if (name == "hemisphere") return SyntheticSceneOptions::Layout::kHemisphere;
   if (name == "sequence") return SyntheticSceneOptions::Layout::kSequence;
-  throw InputError("unknown layout '" + name + "' (expected ring, hemisphere or sequence)");
+  if (name == "aerial") return SyntheticSceneOptions::Layout::kAerial;
+  throw InputError("unknown layout '" + name + "' (expected ring, hemisphere, sequence or aerial)");
 }
 
 SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& options) {
@@ -79,6 +184,12 @@ SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& option
   if (options.layout == SyntheticSceneOptions::Layout::kSequence) {
     scene_options.num_temples =
         1 + static_cast<int>(std::lround(SequenceLength(options) / scene_options.temple_spacing));
+  }
+  if (options.layout == SyntheticSceneOptions::Layout::kAerial) {
+    // The town reaches past the survey by the width of an oblique view's field.
+    const double zoom = options.EffectiveFocalLength() / (0.9 * options.width);
+    scene_options.kind = SceneModelOptions::Kind::kTown;
+    scene_options.town_half_size = SurveyPlan(options, zoom).HalfExtent().maxCoeff() + 120.0 * zoom;
   }
   return scene_options;
 }
@@ -100,6 +211,25 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
   views.AddCamera(Camera::Create(1, CameraModelId::kPinhole, focal_length, options.width, options.height));
   views.GetCamera(1).has_prior_focal_length = true;
   const int n = options.num_views;
+  if (options.layout == SyntheticSceneOptions::Layout::kAerial) {
+    // Names from a random permutation, ids in name order: neither says where a view is.
+    const std::vector<Rigid3d> poses = AerialSurveyPoses(options, zoom, &engine);
+    std::vector<int> name_of_view(n);
+    for (int i = 0; i < n; ++i) name_of_view[i] = i;
+    std::shuffle(name_of_view.begin(), name_of_view.end(), engine);
+    std::vector<int> view_of_name(n);
+    for (int i = 0; i < n; ++i) view_of_name[name_of_view[i]] = i;
+    for (int k = 0; k < n; ++k) {
+      Image image;
+      image.image_id = static_cast<image_t>(k + 1);
+      image.camera_id = 1;
+      image.name = ViewName(k, /*aerial=*/true);
+      image.cam_from_world = poses[view_of_name[k]];
+      views.AddImage(std::move(image));
+      views.RegisterImage(static_cast<image_t>(k + 1));
+    }
+    return views;
+  }
   for (int i = 0; i < n; ++i) {
     Eigen::Vector3d center = Eigen::Vector3d::Zero();
     Eigen::Vector3d target = Eigen::Vector3d::Zero();
@@ -123,6 +253,7 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
         target = Eigen::Vector3d(0.0, 0.0, 2.5);
         break;
       }
+      case SyntheticSceneOptions::Layout::kAerial: break;  // Returned above.
       case SyntheticSceneOptions::Layout::kSequence: {
         // Walking past the row, the gaze swinging slowly forwards and backwards.
         const double x = row_middle - 0.5 * SequenceLength(options) + i * kSequenceStep;
@@ -139,12 +270,22 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
     Image image;
     image.image_id = static_cast<image_t>(i + 1);
     image.camera_id = 1;
-    image.name = ViewName(i);
+    image.name = ViewName(i, /*aerial=*/false);
     image.cam_from_world = LookAt(center, target);
     views.AddImage(std::move(image));
     views.RegisterImage(static_cast<image_t>(i + 1));
   }
   return views;
+}
+
+GeodeticPosition SyntheticSurveyOrigin() { return {46.5191, 6.5668, 400.0}; }
+
+GeodeticPosition SyntheticGpsPosition(const SyntheticSceneOptions& options, image_t image_id,
+                                      const Eigen::Vector3d& center) {
+  std::mt19937_64 engine(Mix32(static_cast<uint32_t>(options.seed) ^ 0x6B5Du) * 0x9E3779B97F4A7C15ull + image_id);
+  std::normal_distribution<double> noise(0.0, options.gps_noise);
+  const Eigen::Vector3d noisy = center + Eigen::Vector3d(noise(engine), noise(engine), 2.0 * noise(engine));
+  return GeodeticFromEnu(noisy, SyntheticSurveyOrigin());
 }
 
 RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, int view_idx) {
@@ -183,16 +324,20 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
   CreateDirectoryOrThrow(output_dir);
   CreateDirectoryOrThrow(output_dir / "gt");
 
-  // Whole views per thread: rendering and PNG encoding then both run in parallel.
+  // Whole views per thread: rendering and encoding then both run in parallel.
+  const bool aerial = options.layout == SyntheticSceneOptions::Layout::kAerial;
   const std::vector<image_t> image_ids = views.RegImageIds();
   ParallelFor(0, image_ids.size(), options.num_threads, [&](size_t i) {
     const Image& image = views.GetImage(image_ids[i]);
     RenderOptions render_options = SyntheticSceneRenderOptions(options, static_cast<int>(i));
     render_options.num_threads = 1;
     const cv::Mat rendered = RenderView(scene, camera, image.cam_from_world, render_options);
-    const std::string png = EncodePng(rendered);
-    WriteFileAtomically(output_dir / image.name, [&png](std::ostream& stream) {
-      stream.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    const std::string encoded =
+        aerial ? InsertJpegExif(EncodeJpeg(rendered, 92),
+                                EncodeExifTiff(AerialViewExif(options, camera, image)))
+               : EncodePng(rendered);
+    WriteFileAtomically(output_dir / image.name, [&encoded](std::ostream& stream) {
+      stream.write(encoded.data(), static_cast<std::streamsize>(encoded.size()));
     }, /*binary=*/true);
     PARALLAX_LOG(Debug) << "rendered " << image.name;
   });
@@ -240,6 +385,22 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
               "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
               "# Number of points: 0, mean track length: 0\n";
   });
+  if (aerial) {
+    const Timer covisibility_timer;
+    CovisibilityOptions covisibility_options;
+    covisibility_options.seed = options.seed;
+    covisibility_options.num_threads = options.num_threads;
+    const std::vector<CovisiblePair> pairs = ComputeCovisiblePairs(scene, views, covisibility_options);
+    WriteFileAtomically(output_dir / "gt" / "overlap_pairs.txt", [&](std::ostream& stream) {
+      for (const CovisiblePair& pair : pairs) {
+        stream << views.GetImage(pair.image_id1).name << ' ' << views.GetImage(pair.image_id2).name << ' '
+               << pair.num_shared_points << '\n';
+      }
+    });
+    PARALLAX_LOG(Info) << "synthetic scene: " << pairs.size() << " pairs of views share at least "
+                       << covisibility_options.min_shared_points << " scene points ("
+                       << covisibility_timer.ElapsedSeconds() << " s)";
+  }
   PARALLAX_LOG(Info) << "synthetic scene: " << views.NumImages() << " views of " << options.width << "x"
                      << options.height << " in " << output_dir.string() << " ("
                      << scene.Options().num_temples << " temple(s), " << timer.ElapsedSeconds() << " s)";

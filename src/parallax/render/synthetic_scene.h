@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "parallax/geometry/gps.h"
 #include "parallax/render/renderer.h"
 #include "parallax/render/scene_model.h"
 #include "parallax/scene/reconstruction.h"
@@ -17,6 +18,7 @@ struct SyntheticSceneOptions {
     kRing,        // a ring around one temple, looking at it from about 17 degrees above
     kHemisphere,  // a spiral around one temple from 10 to 65 degrees of elevation
     kSequence,    // a walk past a row of temples, looking sideways and down (sequential matching)
+    kAerial,      // a drone survey of a town in overlapping strips, JPEG with EXIF focal and GPS
   };
 
   // Number of views.
@@ -42,6 +44,11 @@ struct SyntheticSceneOptions {
   Antialiasing antialiasing = Antialiasing::kQuincunx;
   // Cast sun shadows.
   bool shadows = true;
+  // kAerial: share of the views tilted 30 degrees off nadir (forwards, backwards or sideways).
+  double oblique_fraction = 0.1;
+  // kAerial: standard deviation in metres of the noise on the EXIF GPS positions (horizontal;
+  // twice that vertically, as receivers are).
+  double gps_noise = 3.0;
   // Prefix of the Middlebury-style camera file `<name>_par.txt`.
   std::string name = "synth";
   // Worker threads (<= 0: all cores).
@@ -51,24 +58,36 @@ struct SyntheticSceneOptions {
   double EffectiveFocalLength() const { return focal_length > 0 ? focal_length : 0.9 * width; }
 };
 
-// Parses "ring", "hemisphere" or "sequence"; throws InputError otherwise.
+// Parses "ring", "hemisphere", "sequence" or "aerial"; throws InputError otherwise.
 SyntheticSceneOptions::Layout SyntheticSceneLayoutFromName(const std::string& name);
 
 // The scene for these options (one temple, or a row long enough for the sequence).
 SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& options);
 
 // The exact views without rendering: camera 1 (PINHOLE, principal point at the image centre),
-// registered images 1..num_views named view_0001.png..., without keypoints.
+// registered images 1..num_views named view_0001.png..., without keypoints. Aerial views are
+// named IMG_00001.jpg... in a random order that says nothing about where they were taken,
+// ids in name order; world x east, y north, z up, metres.
 Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options);
+
+// Where the aerial survey's local frame (east, north, up) sits on the WGS84 ellipsoid.
+GeodeticPosition SyntheticSurveyOrigin();
+
+// The position EXIF records for an aerial view centred at `center` (local metres): its
+// geodetic position with GPS noise drawn from the seed and the view's id.
+GeodeticPosition SyntheticGpsPosition(const SyntheticSceneOptions& options, image_t image_id,
+                                      const Eigen::Vector3d& center);
 
 // Lighting, noise and blur of view `view_idx` (0-based).
 RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, int view_idx);
 
-// Renders every view into `output_dir` (created if needed) as view_0001.png..., and writes
-// the exact cameras: `<name>_par.txt` (first line the count, then per view
+// Renders every view into `output_dir` (created if needed) as view_0001.png... (aerial:
+// IMG_00001.jpg... with EXIF focal length, sensor size and GPS), and writes the exact cameras: `<name>_par.txt` (first line the count, then per view
 // `name k11..k33 r11..r33 t1 t2 t3`, projection K [R | t] world to camera, COLMAP's pixel
 // convention), `K.txt` (3x3) and a COLMAP text model gt/{cameras,images,points3D}.txt
-// without points. Deterministic for a seed. Returns the views (as SyntheticSceneViews).
+// without points; aerial surveys add gt/overlap_pairs.txt, one line `NAME1 NAME2 SHARED`
+// per pair of views that see at least 30 scene points in common (ComputeCovisiblePairs).
+// Deterministic for a seed. Returns the views (as SyntheticSceneViews).
 Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
                                       const std::filesystem::path& output_dir);
 

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "parallax/calibration/exif.h"
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -145,6 +146,76 @@ TEST_F(SyntheticSceneTest, WritesImagesAndExactCameras) {
   const std::string first = ReadFileToString(dir_ / "view_0003.png");
   GenerateSyntheticScene(options, dir_);
   EXPECT_EQ(ReadFileToString(dir_ / "view_0003.png"), first);
+}
+
+}  // namespace
+}  // namespace parallax
+
+namespace parallax {
+namespace {
+
+TEST(SyntheticSceneViews, AerialSurveyFliesStripsOverTheTown) {
+  SyntheticSceneOptions options;
+  options.layout = SyntheticSceneOptions::Layout::kAerial;
+  options.num_views = 120;
+  options.oblique_fraction = 0.25;
+  const Reconstruction views = SyntheticSceneViews(options);
+  ASSERT_EQ(views.NumRegImages(), 120u);
+  const SceneModel scene(SyntheticSceneModelOptions(options));
+  EXPECT_EQ(scene.Options().kind, SceneModelOptions::Kind::kTown);
+  int oblique = 0;
+  std::vector<Eigen::Vector3d> centers;
+  for (const auto& [image_id, image] : views.Images()) {
+    EXPECT_EQ(image.name.substr(0, 4), "IMG_");
+    const Eigen::Vector3d direction = image.ViewingDirection();
+    EXPECT_LT(direction.z(), -0.8);  // Nadir or 30 degrees off it, with gimbal error.
+    if (direction.z() > -0.95) ++oblique;
+    EXPECT_NEAR(image.ProjectionCenter().z(), 60.0, 5.0);
+    SurfaceHit hit;
+    ASSERT_TRUE(scene.Intersect(image.ProjectionCenter(), direction, 1e9, &hit));
+    centers.push_back(image.ProjectionCenter());
+  }
+  EXPECT_GT(oblique, 15);
+  EXPECT_LT(oblique, 50);
+  // Names say nothing about position: name order is not flight order.
+  double step_sum = 0;
+  for (size_t i = 1; i < centers.size(); ++i) step_sum += (centers[i] - centers[i - 1]).norm();
+  EXPECT_GT(step_sum / (centers.size() - 1), 40.0);  // Flight order steps are 10 m.
+}
+
+TEST(SyntheticScene, AerialJpegsCarryExifFocalAndGps) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("parallax_aerial_scene_test_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  SyntheticSceneOptions options;
+  options.layout = SyntheticSceneOptions::Layout::kAerial;
+  options.num_views = 8;
+  options.width = 160;
+  options.height = 120;
+  options.num_threads = 2;
+  const Reconstruction views = GenerateSyntheticScene(options, dir);
+  for (const auto& [image_id, image] : views.Images()) {
+    const std::optional<ExifData> exif = ReadExif(dir / image.name);
+    ASSERT_TRUE(exif.has_value()) << image.name;
+    EXPECT_NEAR(*FocalLengthPixelsFromExif(*exif, 160, 120), 144.0, 0.01);
+    ASSERT_TRUE(exif->gps_latitude && exif->gps_longitude && exif->gps_altitude);
+    const Eigen::Vector3d enu = EnuFromGeodetic({*exif->gps_latitude, *exif->gps_longitude, *exif->gps_altitude},
+                                                SyntheticSurveyOrigin());
+    // 3 m of noise horizontally, 6 m vertically: well within 20 m.
+    EXPECT_LT((enu - image.ProjectionCenter()).norm(), 20.0) << image.name;
+    EXPECT_FALSE(cv::imread((dir / image.name).string()).empty());
+  }
+  std::ifstream pairs(dir / "gt" / "overlap_pairs.txt");
+  std::string name1, name2;
+  int shared = 0, count = 0;
+  while (pairs >> name1 >> name2 >> shared) {
+    EXPECT_LT(name1, name2);
+    EXPECT_GE(shared, 30);
+    EXPECT_TRUE(std::filesystem::exists(dir / name1));
+    ++count;
+  }
+  EXPECT_GT(count, 0);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
