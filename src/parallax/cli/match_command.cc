@@ -6,6 +6,7 @@
 #include "parallax/cli/commands.h"
 #include "parallax/cli/pipeline_options_cli.h"
 #include "parallax/pipeline/feature_matching.h"
+#include "parallax/pipeline/run_summary.h"
 #include "parallax/util/check.h"
 #include "parallax/util/run_lock.h"
 
@@ -76,7 +77,9 @@ int RunMatch(int argc, char** argv) {
   app.add_option("--threads", options.num_threads, "Worker threads (-1: all cores)")
       ->capture_default_str();
   app.add_flag("--stats", print_stats,
-               "Print per image keypoints and per pair putative matches and inliers");
+               "Print per image keypoints and per pair putative matches and inliers, then the "
+               "matching summary (pairs considered, matched, stopped by the preemptive test, "
+               "verified) as JSON");
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
@@ -87,10 +90,14 @@ int RunMatch(int argc, char** argv) {
     Database database(database_path);
     const RunLock lock(DatabaseLockPath(database_path), database_path);
     const FeatureMatchingStats stats = MatchAndVerify(options, &database);
-    if (print_stats) PrintStatsTables(database);
+    if (print_stats) {
+      PrintStatsTables(database);
+      std::cout << MatchingSummary(stats).dump(2) << "\n";
+    }
     std::cout << "match: " << stats.num_pairs << " pairs, " << stats.num_matched << " matched, "
-              << stats.num_skipped << " already verified, " << stats.num_verified << " verified; "
-              << stats.seconds << " s" << std::endl;
+              << stats.num_skipped << " already verified, " << stats.num_verified << " verified, "
+              << stats.num_preemptive_rejected << " stopped by the preemptive test; " << stats.seconds
+              << " s" << std::endl;
     return 0;
   });
 }

@@ -62,13 +62,70 @@ void ExtractionFlags::Apply(FeatureExtractionOptions* options) const {
 }
 
 void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) {
-  app.add_option("--pairs", pair_mode_, "Which pairs to match")
+  PairSelectionOptions& pairs = options->pairs;
+  app.add_option("--pairs", pair_mode_,
+                 "Which pairs to match: auto (exhaustive up to --auto-exhaustive-max-images, "
+                 "retrieval above, plus spatial when images have GPS), exhaustive, sequential "
+                 "(name order), retrieval (vocabulary tree) or spatial (EXIF GPS neighbours)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"exhaustive", "sequential"}));
-  app.add_option("--overlap", options->sequential_overlap,
-                 "Sequential mode: neighbours matched per image")
+      ->check(CLI::IsMember({"auto", "exhaustive", "sequential", "retrieval", "spatial"}));
+  app.add_option("--auto-exhaustive-max-images", pairs.auto_exhaustive_max_images,
+                 "Auto mode: match every pair up to this many images")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 1000000));
+  app.add_option("--overlap", pairs.sequential_overlap, "Sequential mode: neighbours matched per image")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--vocab-tree", pairs.retrieval.vocab_tree_path,
+                 "Retrieval: a vocabulary tree saved by an earlier run (default: the one beside the "
+                 "database, or one trained on this collection and saved there)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--retrieval-neighbors", pairs.retrieval.num_neighbors,
+                 "Retrieval: most similar images matched per image")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--retrieval-loop-neighbors", pairs.retrieval.num_loop_neighbors,
+                 "Retrieval: after verification, images sharing the most verified neighbours "
+                 "matched per image, to close loops retrieval missed (0: none)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--retrieval-loop-rounds", pairs.retrieval.num_loop_rounds,
+                 "Retrieval: rounds of loop-closing pairs, each from the pairs verified so far")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--vocab-tree-depth", pairs.retrieval.tree.depth,
+                 "Retrieval: levels of a newly trained tree (up to branching^depth words)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 8));
+  app.add_option("--vocab-tree-branching", pairs.retrieval.tree.branching,
+                 "Retrieval: children per node of a newly trained tree")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 256));
+  app.add_option("--spatial-neighbors", pairs.spatial.num_neighbors,
+                 "Spatial: nearest images by GPS matched per image")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--spatial-max-distance", pairs.spatial.max_distance,
+                 "Spatial: farthest GPS distance of a pair, metres")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  auto* preemptive_flag = app.add_flag("--preemptive", preemptive_,
+                                       "Match each pair's largest features first and skip pairs "
+                                       "that find too few (Wu 2013; default: per mode, see docs)");
+  app.add_flag("--no-preemptive", no_preemptive_, "Never skip a pair by the preemptive test")
+      ->excludes(preemptive_flag);
+  app.add_option("--preemptive-features", options->preemptive.num_features,
+                 "Preemptive test: largest-scale features matched per image")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--preemptive-ratio", options->preemptive.max_ratio,
+                 "Preemptive test: Lowe's ratio of its matches (0: --ratio)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--preemptive-min-matches", options->preemptive.min_matches,
+                 "Preemptive test: fewer matches skip the pair")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--ratio", options->matching.max_ratio, "Lowe's ratio test threshold")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
@@ -80,7 +137,9 @@ void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) 
 }
 
 void MatchingFlags::Apply(FeatureMatchingPipelineOptions* options) const {
-  options->pair_mode = *PairModeFromName(pair_mode_);
+  options->pairs.mode = *PairModeFromName(pair_mode_);
+  if (preemptive_) options->preemptive.enabled = true;
+  if (no_preemptive_) options->preemptive.enabled = false;
   if (no_cross_check_) options->matching.cross_check = false;
 }
 

@@ -27,8 +27,10 @@ class MatchingFlags {
   void Apply(FeatureMatchingPipelineOptions* options) const;
 
  private:
-  std::string pair_mode_ = "exhaustive";
+  std::string pair_mode_ = "auto";
   bool no_cross_check_ = false;
+  bool preemptive_ = false;
+  bool no_preemptive_ = false;
 };
 
 }  // namespace parallax::cli

@@ -18,6 +18,7 @@ namespace {
 // What matching and verification need of one image, loaded once per batch that uses it.
 struct ImageFeatures {
   MatchableDescriptors descriptors;
+  MatchableDescriptors largest;  // The preemptive test's largest-scale features.
   std::vector<Eigen::Vector2d> points;  // Keypoints as stored (pixel centres at +0.5).
 };
 
@@ -29,6 +30,8 @@ struct PairJob {
   TwoViewGeometry geometry;
   double matching_seconds = 0;
   double verification_seconds = 0;
+  int num_preemptive_matches = -1;
+  bool preemptive_rejected = false;
   bool done = false;  // False when a signal stopped the batch before this pair ran.
 };
 
@@ -37,52 +40,42 @@ bool IsVerified(const TwoViewGeometry& geometry) {
          geometry.config != TwoViewGeometry::kDegenerate && !geometry.inlier_matches.empty();
 }
 
+// The rows of the `count` largest-scale keypoints (all when there are fewer).
+MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints, const MatchableDescriptors& descriptors,
+                                     int count) {
+  std::vector<int> order(keypoints.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  const size_t keep = std::min(order.size(), static_cast<size_t>(count));
+  std::partial_sort(order.begin(), order.begin() + keep, order.end(), [&keypoints](int a, int b) {
+    const float scale_a = keypoints[a].ComputeScale(), scale_b = keypoints[b].ComputeScale();
+    return scale_a != scale_b ? scale_a > scale_b : a < b;
+  });
+  MatchableDescriptors largest;
+  largest.values.resize(static_cast<Eigen::Index>(keep), descriptors.values.cols());
+  for (size_t k = 0; k < keep; ++k) largest.values.row(static_cast<Eigen::Index>(k)) = descriptors.values.row(order[k]);
+  return largest;
+}
+
 }  // namespace
 
-std::optional<PairMode> PairModeFromName(const std::string& name) {
-  if (name == "exhaustive") return PairMode::kExhaustive;
-  if (name == "sequential") return PairMode::kSequential;
-  return std::nullopt;
+void PreemptiveMatchingOptions::Check() const {
+  PARALLAX_CHECK_GT(num_features, 0);
+  PARALLAX_CHECK_GE(min_matches, 0);
+  PARALLAX_CHECK_GE(max_ratio, 0.0);
+  PARALLAX_CHECK_LE(max_ratio, 1.0);
+}
+
+bool PreemptiveByDefault(const PairSelection& selection) {
+  (void)selection;
+  return false;
 }
 
 void FeatureMatchingPipelineOptions::Check() const {
   matching.Check();
   geometry.Check();
-  PARALLAX_CHECK_GT(sequential_overlap, 0);
+  pairs.Check();
+  preemptive.Check();
   PARALLAX_CHECK_GT(batch_size, 0);
-  PARALLAX_CHECK_GT(block_size, 0);
-}
-
-std::vector<std::pair<image_t, image_t>> ExhaustivePairs(const std::vector<image_t>& image_ids,
-                                                         int block_size) {
-  PARALLAX_CHECK_GT(block_size, 0);
-  const size_t n = image_ids.size();
-  const size_t block = static_cast<size_t>(block_size);
-  std::vector<std::pair<image_t, image_t>> pairs;
-  pairs.reserve(n * (n - std::min<size_t>(n, 1)) / 2);
-  // Block by block, so that consecutive pairs share their images.
-  for (size_t start1 = 0; start1 < n; start1 += block) {
-    for (size_t start2 = start1; start2 < n; start2 += block) {
-      for (size_t i = start1; i < std::min(n, start1 + block); ++i) {
-        for (size_t j = std::max(start2, i + 1); j < std::min(n, start2 + block); ++j) {
-          pairs.emplace_back(image_ids[i], image_ids[j]);
-        }
-      }
-    }
-  }
-  return pairs;
-}
-
-std::vector<std::pair<image_t, image_t>> SequentialPairs(const std::vector<image_t>& image_ids,
-                                                         int overlap) {
-  PARALLAX_CHECK_GT(overlap, 0);
-  std::vector<std::pair<image_t, image_t>> pairs;
-  for (size_t i = 0; i < image_ids.size(); ++i) {
-    for (size_t j = i + 1; j < std::min(image_ids.size(), i + 1 + overlap); ++j) {
-      pairs.emplace_back(image_ids[i], image_ids[j]);
-    }
-  }
-  return pairs;
 }
 
 FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& options,
@@ -116,10 +109,11 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
     }
   }
 
-  const std::vector<std::pair<image_t, image_t>> all_pairs =
-      options.pair_mode == PairMode::kExhaustive
-          ? ExhaustivePairs(image_ids, options.block_size)
-          : SequentialPairs(image_ids, options.sequential_overlap);
+  PairSelection selection = SelectPairs(options.pairs, image_ids, *database);
+  const std::vector<std::pair<image_t, image_t>> all_pairs = std::move(selection.pairs);
+  selection.pairs.clear();
+  stats.selection = selection;
+  stats.preemptive = options.preemptive.enabled.value_or(PreemptiveByDefault(selection));
   stats.num_pairs = all_pairs.size();
   std::vector<std::pair<image_t, image_t>> pairs;
   for (const auto& pair : all_pairs) {
@@ -129,130 +123,179 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
       pairs.push_back(pair);
     }
   }
-  PARALLAX_LOG(Info) << "Matching: " << image_ids.size() << " images, " << all_pairs.size()
-                     << (options.pair_mode == PairMode::kExhaustive ? " exhaustive" : " sequential")
-                     << " pairs, " << stats.num_skipped << " already verified, " << pairs.size()
-                     << " to match";
+  std::string mode_names;
+  for (const PairMode mode : selection.modes) mode_names += (mode_names.empty() ? "" : " + ") + PairModeName(mode);
+  PARALLAX_LOG(Info) << "Matching: " << image_ids.size() << " images, " << all_pairs.size() << " "
+                     << mode_names << " pairs (" << selection.reason << "; chosen in " << selection.seconds
+                     << " s), " << stats.num_skipped << " already verified, " << pairs.size() << " to match"
+                     << (stats.preemptive ? ", preemptive test on" : "");
 
   // Each pair runs on one thread; the parallelism is over pairs.
   FeatureMatchingOptions matching_options = options.matching;
   matching_options.num_threads = 1;
-  const size_t cache_capacity = 2 * static_cast<size_t>(options.block_size);
+  FeatureMatchingOptions preemptive_matching_options = matching_options;
+  if (options.preemptive.max_ratio > 0) preemptive_matching_options.max_ratio = options.preemptive.max_ratio;
+  const size_t cache_capacity = 2 * static_cast<size_t>(options.pairs.block_size);
   std::unordered_map<image_t, ImageFeatures> cache;
-  ProgressReporter progress("matching", pairs.size());
+  // Matches, verifies and stores `pairs` in batches (one transaction each).
+  const auto match_pairs = [&](const std::vector<std::pair<image_t, image_t>>& pairs, const char* label) {
+    ProgressReporter progress(label, pairs.size());
 
-  for (size_t batch_start = 0; batch_start < pairs.size(); batch_start += options.batch_size) {
-    const size_t batch_end = std::min(pairs.size(), batch_start + options.batch_size);
+    for (size_t batch_start = 0; batch_start < pairs.size(); batch_start += options.batch_size) {
+      const size_t batch_end = std::min(pairs.size(), batch_start + options.batch_size);
 
-    // Load the images this batch needs (database reads are sequential; preparing the
-    // descriptors is parallel).
-    std::vector<image_t> needed;
-    std::unordered_set<image_t> needed_set;
-    for (size_t k = batch_start; k < batch_end; ++k) {
-      for (image_t image_id : {pairs[k].first, pairs[k].second}) {
-        if (needed_set.insert(image_id).second) needed.push_back(image_id);
+      // Load the images this batch needs (database reads are sequential; preparing the
+      // descriptors is parallel).
+      std::vector<image_t> needed;
+      std::unordered_set<image_t> needed_set;
+      for (size_t k = batch_start; k < batch_end; ++k) {
+        for (image_t image_id : {pairs[k].first, pairs[k].second}) {
+          if (needed_set.insert(image_id).second) needed.push_back(image_id);
+        }
       }
-    }
-    std::vector<image_t> missing;
-    for (image_t image_id : needed) {
-      if (cache.count(image_id) == 0) missing.push_back(image_id);
-    }
-    if (cache.size() + missing.size() > cache_capacity) {
-      for (auto it = cache.begin(); it != cache.end();) {
-        it = needed_set.count(it->first) > 0 ? std::next(it) : cache.erase(it);
+      std::vector<image_t> missing;
+      for (image_t image_id : needed) {
+        if (cache.count(image_id) == 0) missing.push_back(image_id);
       }
-    }
-    std::vector<FeatureDescriptors> raw_descriptors(missing.size());
-    for (size_t m = 0; m < missing.size(); ++m) {
-      ImageFeatures& features = cache[missing[m]];
-      const FeatureKeypoints keypoints = database->ReadKeypoints(missing[m]);
-      features.points.reserve(keypoints.size());
-      for (const FeatureKeypoint& keypoint : keypoints) {
-        features.points.emplace_back(keypoint.x, keypoint.y);
+      if (cache.size() + missing.size() > cache_capacity) {
+        for (auto it = cache.begin(); it != cache.end();) {
+          it = needed_set.count(it->first) > 0 ? std::next(it) : cache.erase(it);
+        }
       }
-      raw_descriptors[m] = database->ReadDescriptors(missing[m]);
-      if (static_cast<size_t>(raw_descriptors[m].rows()) != keypoints.size()) {
-        throw InputError(database->Path().string() + ": image " + std::to_string(missing[m]) +
-                         " has " + std::to_string(keypoints.size()) + " keypoints but " +
-                         std::to_string(raw_descriptors[m].rows()) + " descriptors");
+      std::vector<FeatureDescriptors> raw_descriptors(missing.size());
+      for (size_t m = 0; m < missing.size(); ++m) {
+        ImageFeatures& features = cache[missing[m]];
+        const FeatureKeypoints keypoints = database->ReadKeypoints(missing[m]);
+        features.points.reserve(keypoints.size());
+        for (const FeatureKeypoint& keypoint : keypoints) {
+          features.points.emplace_back(keypoint.x, keypoint.y);
+        }
+        raw_descriptors[m] = database->ReadDescriptors(missing[m]);
+        if (static_cast<size_t>(raw_descriptors[m].rows()) != keypoints.size()) {
+          throw InputError(database->Path().string() + ": image " + std::to_string(missing[m]) +
+                           " has " + std::to_string(keypoints.size()) + " keypoints but " +
+                           std::to_string(raw_descriptors[m].rows()) + " descriptors");
+        }
       }
-    }
-    ParallelFor(0, missing.size(), options.num_threads, [&](size_t m) {
-      cache.at(missing[m]).descriptors = PrepareDescriptors(raw_descriptors[m]);
-    });
-    raw_descriptors.clear();
+      std::vector<FeatureKeypoints> missing_keypoints(missing.size());
+      if (stats.preemptive) {
+        for (size_t m = 0; m < missing.size(); ++m) missing_keypoints[m] = database->ReadKeypoints(missing[m]);
+      }
+      ParallelFor(0, missing.size(), options.num_threads, [&](size_t m) {
+        ImageFeatures& features = cache.at(missing[m]);
+        features.descriptors = PrepareDescriptors(raw_descriptors[m]);
+        if (stats.preemptive) {
+          features.largest =
+              LargestFeatures(missing_keypoints[m], features.descriptors, options.preemptive.num_features);
+        }
+      });
+      raw_descriptors.clear();
 
-    std::vector<PairJob> jobs(batch_end - batch_start);
-    for (size_t k = 0; k < jobs.size(); ++k) {
-      PairJob& job = jobs[k];
-      job.image_id1 = pairs[batch_start + k].first;
-      job.image_id2 = pairs[batch_start + k].second;
-      job.has_matches = database->ExistsMatches(job.image_id1, job.image_id2);
-      if (job.has_matches) job.matches = database->ReadMatches(job.image_id1, job.image_id2);
-    }
-
-    ParallelFor(0, jobs.size(), options.num_threads, [&](size_t k) {
-      // After a signal no new pair starts; the finished ones are stored below.
-      if (PendingInterruptSignal() != 0) return;
-      PairJob& job = jobs[k];
-      const ImageFeatures& features1 = cache.at(job.image_id1);
-      const ImageFeatures& features2 = cache.at(job.image_id2);
-      Timer pair_timer;
-      if (!job.has_matches) {
-        job.matches =
-            MatchDescriptors(features1.descriptors, features2.descriptors, matching_options);
+      std::vector<PairJob> jobs(batch_end - batch_start);
+      for (size_t k = 0; k < jobs.size(); ++k) {
+        PairJob& job = jobs[k];
+        job.image_id1 = pairs[batch_start + k].first;
+        job.image_id2 = pairs[batch_start + k].second;
+        job.has_matches = database->ExistsMatches(job.image_id1, job.image_id2);
+        if (job.has_matches) job.matches = database->ReadMatches(job.image_id1, job.image_id2);
       }
-      job.matching_seconds = pair_timer.ElapsedSeconds();
-      pair_timer.Restart();
-      if (static_cast<int>(job.matches.size()) < options.geometry.min_num_inliers) {
-        // Too few to verify: recorded as degenerate so a resumed run does not retry it.
-        job.geometry.config = TwoViewGeometry::kDegenerate;
-      } else {
-        // RANSAC draws from the thread's generator: seeding it by pair makes the result
-        // independent of which thread runs the pair; the caller's stream is restored.
-        const std::mt19937_64 saved_prng = ThreadLocalPRNG();
-        SetPRNGSeed(ImagePairToPairId(job.image_id1, job.image_id2));
-        job.geometry =
-            EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)), features1.points,
-                                    cameras.at(camera_of_image.at(job.image_id2)), features2.points,
-                                    job.matches, options.geometry);
-        ThreadLocalPRNG() = saved_prng;
+
+      ParallelFor(0, jobs.size(), options.num_threads, [&](size_t k) {
+        // After a signal no new pair starts; the finished ones are stored below.
+        if (PendingInterruptSignal() != 0) return;
+        PairJob& job = jobs[k];
+        const ImageFeatures& features1 = cache.at(job.image_id1);
+        const ImageFeatures& features2 = cache.at(job.image_id2);
+        Timer pair_timer;
+        if (!job.has_matches && stats.preemptive) {
+          job.num_preemptive_matches = static_cast<int>(
+              MatchDescriptors(features1.largest, features2.largest, preemptive_matching_options).size());
+          job.preemptive_rejected = job.num_preemptive_matches < options.preemptive.min_matches;
+        }
+        if (!job.has_matches && !job.preemptive_rejected) {
+          job.matches =
+              MatchDescriptors(features1.descriptors, features2.descriptors, matching_options);
+        }
+        job.matching_seconds = pair_timer.ElapsedSeconds();
+        pair_timer.Restart();
+        if (static_cast<int>(job.matches.size()) < options.geometry.min_num_inliers) {
+          // Too few to verify: recorded as degenerate so a resumed run does not retry it.
+          job.geometry.config = TwoViewGeometry::kDegenerate;
+        } else {
+          // RANSAC draws from the thread's generator: seeding it by pair makes the result
+          // independent of which thread runs the pair; the caller's stream is restored.
+          const std::mt19937_64 saved_prng = ThreadLocalPRNG();
+          SetPRNGSeed(ImagePairToPairId(job.image_id1, job.image_id2));
+          job.geometry =
+              EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)), features1.points,
+                                      cameras.at(camera_of_image.at(job.image_id2)), features2.points,
+                                      job.matches, options.geometry);
+          ThreadLocalPRNG() = saved_prng;
+        }
+        job.verification_seconds = pair_timer.ElapsedSeconds();
+        job.done = true;
+        progress.Increment();
+      });
+
+      database->BeginTransaction();
+      for (const PairJob& job : jobs) {
+        if (!job.done) continue;
+        if (!job.has_matches) database->WriteMatches(job.image_id1, job.image_id2, job.matches);
+        database->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
       }
-      job.verification_seconds = pair_timer.ElapsedSeconds();
-      job.done = true;
-      progress.Increment();
-    });
+      database->EndTransaction();
 
-    database->BeginTransaction();
-    for (const PairJob& job : jobs) {
-      if (!job.done) continue;
-      if (!job.has_matches) database->WriteMatches(job.image_id1, job.image_id2, job.matches);
-      database->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
+      for (const PairJob& job : jobs) {
+        if (!job.done) continue;
+        PairMatchStats pair_stats;
+        pair_stats.image_id1 = job.image_id1;
+        pair_stats.image_id2 = job.image_id2;
+        pair_stats.num_putative = static_cast<int>(job.matches.size());
+        pair_stats.num_inliers = static_cast<int>(job.geometry.inlier_matches.size());
+        pair_stats.config = job.geometry.config;
+        pair_stats.num_preemptive_matches = job.num_preemptive_matches;
+        pair_stats.preemptive_rejected = job.preemptive_rejected;
+        stats.pairs.push_back(pair_stats);
+        ++stats.num_matched;
+        if (job.preemptive_rejected) ++stats.num_preemptive_rejected;
+        stats.matching_thread_seconds += job.matching_seconds;
+        stats.verification_thread_seconds += job.verification_seconds;
+        if (IsVerified(job.geometry)) ++stats.num_verified;
+      }
+      ThrowIfInterrupted(std::to_string(stats.num_skipped + stats.num_matched) + " of " +
+                         std::to_string(stats.num_pairs) + " pairs are matched and verified in " +
+                         database->Path().string());
     }
-    database->EndTransaction();
-
-    for (const PairJob& job : jobs) {
-      if (!job.done) continue;
-      PairMatchStats pair_stats;
-      pair_stats.image_id1 = job.image_id1;
-      pair_stats.image_id2 = job.image_id2;
-      pair_stats.num_putative = static_cast<int>(job.matches.size());
-      pair_stats.num_inliers = static_cast<int>(job.geometry.inlier_matches.size());
-      pair_stats.config = job.geometry.config;
-      stats.pairs.push_back(pair_stats);
-      ++stats.num_matched;
-      stats.matching_thread_seconds += job.matching_seconds;
-      stats.verification_thread_seconds += job.verification_seconds;
-      if (IsVerified(job.geometry)) ++stats.num_verified;
-    }
-    ThrowIfInterrupted(std::to_string(stats.num_skipped + stats.num_matched) + " of " +
-                       std::to_string(stats.num_pairs) + " pairs are matched and verified in " +
-                       database->Path().string());
-  }
   progress.Finish();
+  };
+  match_pairs(pairs, "matching");
+
+  // Pairs that close loops: images that verified pairs tie together but retrieval missed.
+  const bool retrieval = std::find(selection.modes.begin(), selection.modes.end(), PairMode::kRetrieval) !=
+                         selection.modes.end();
+  for (int round = 0; retrieval && options.pairs.retrieval.num_loop_neighbors > 0 &&
+                      round < options.pairs.retrieval.num_loop_rounds;
+       ++round) {
+    std::vector<std::pair<image_pair_t, int>> verified;
+    for (const auto& [pair_id, num_inliers] : database->ReadTwoViewGeometryNumInliers()) {
+      if (num_inliers >= options.geometry.min_num_inliers) verified.emplace_back(pair_id, num_inliers);
+    }
+    std::vector<std::pair<image_t, image_t>> loop_pairs;
+    for (const auto& pair : LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors)) {
+      // Pairs tried and rejected before are not candidates again.
+      if (!database->ExistsTwoViewGeometry(pair.first, pair.second)) loop_pairs.push_back(pair);
+    }
+    if (loop_pairs.empty()) break;
+    stats.num_pairs += loop_pairs.size();
+    stats.selection.num_loop_pairs += loop_pairs.size();
+    PARALLAX_LOG(Info) << "Matching: " << loop_pairs.size() << " pairs that close loops (round " << round + 1
+                       << ": neighbours of verified neighbours) to match";
+    match_pairs(OrderPairsForLocality(std::move(loop_pairs), image_ids), "matching loops");
+  }
 
   stats.seconds = timer.ElapsedSeconds();
-  PARALLAX_LOG(Info) << "Matching: " << stats.num_matched << " pairs matched, "
+  PARALLAX_LOG(Info) << "Matching: " << stats.num_matched << " pairs matched ("
+                     << stats.num_preemptive_rejected << " stopped by the preemptive test), "
                      << stats.num_verified << " verified, " << stats.num_skipped << " skipped, "
                      << stats.seconds << " s (thread time: matching "
                      << stats.matching_thread_seconds << " s, verification "

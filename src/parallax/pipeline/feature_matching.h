@@ -7,30 +7,39 @@
 
 #include "parallax/estimators/two_view_geometry.h"
 #include "parallax/feature/matcher.h"
+#include "parallax/pipeline/pair_selection.h"
 #include "parallax/scene/database.h"
 
 namespace parallax {
 
-// Which image pairs are matched.
-enum class PairMode {
-  kExhaustive,  // Every pair.
-  kSequential,  // Each image with the next `sequential_overlap` images in name order.
+// Preemptive matching (Wu, "Towards Linear-time Incremental Structure from Motion", 3DV 2013):
+// a pair whose few largest-scale features barely match is not worth the full match. Large
+// features are the ones both views of an overlapping pair see (small ones vanish at the
+// coarser scale of either view), so few matches among them mean little overlap.
+struct PreemptiveMatchingOptions {
+  // Unset: on for the modes where it was measured to lose no pair that matters (see
+  // PreemptiveByDefault); true or false: as given.
+  std::optional<bool> enabled;
+  // Largest-scale features per image matched first (Wu: 100).
+  int num_features = 100;
+  // Fewer matches among those and the full match is skipped (Wu: 4).
+  int min_matches = 4;
+  // Lowe's ratio for the test's matches; 0: the full match's.
+  double max_ratio = 0.0;
+  void Check() const;
 };
 
-// "exhaustive" / "sequential"; nullopt for anything else.
-std::optional<PairMode> PairModeFromName(const std::string& name);
+// Whether preemptive matching is on for a selection when not set explicitly.
+bool PreemptiveByDefault(const PairSelection& selection);
 
 struct FeatureMatchingPipelineOptions {
   FeatureMatchingOptions matching;  // Ratio test, distance bound, cross-check.
   TwoViewGeometryOptions geometry;  // Geometric verification (RANSAC threshold, inliers).
-  PairMode pair_mode = PairMode::kExhaustive;
-  int sequential_overlap = 10;  // Neighbours per image in sequential mode.
-  int num_threads = -1;         // Pairs processed in parallel; -1: all cores.
+  PairSelectionOptions pairs;       // Which pairs (exhaustive, retrieval, GPS, ...).
+  PreemptiveMatchingOptions preemptive;
+  int num_threads = -1;  // Pairs processed in parallel; -1: all cores.
   // Pairs written per transaction; a killed run loses at most one batch.
   int batch_size = 500;
-  // Exhaustive mode walks blocks of this many images so that only about two blocks of
-  // prepared descriptors are held in memory at once.
-  int block_size = 50;
   void Check() const;
 };
 
@@ -41,12 +50,17 @@ struct PairMatchStats {
   int num_putative = 0;
   int num_inliers = 0;
   int config = TwoViewGeometry::kUndefined;
+  int num_preemptive_matches = -1;   // Matches among the largest features (-1: not tested).
+  bool preemptive_rejected = false;  // The full match was skipped.
 };
 
 struct FeatureMatchingStats {
-  size_t num_pairs = 0;               // Pairs the mode selects.
+  PairSelection selection;            // How the pairs were chosen (pairs themselves cleared).
+  bool preemptive = false;            // Whether the preemptive test ran.
+  size_t num_pairs = 0;               // Pairs the mode selects ("considered").
   size_t num_skipped = 0;             // Already verified in the database (resumed run).
   size_t num_matched = 0;             // Matched (or read back) and verified in this run.
+  size_t num_preemptive_rejected = 0; // Of those, pairs the preemptive test stopped.
   size_t num_verified = 0;            // Of those, pairs with an accepted geometry.
   std::vector<PairMatchStats> pairs;  // One per pair processed in this run.
   double seconds = 0;
@@ -54,13 +68,6 @@ struct FeatureMatchingStats {
   double matching_thread_seconds = 0;
   double verification_thread_seconds = 0;
 };
-
-// Image pairs in processing order, smaller position in `image_ids` first. `image_ids` are
-// sorted by image name by the caller.
-std::vector<std::pair<image_t, image_t>> ExhaustivePairs(const std::vector<image_t>& image_ids,
-                                                         int block_size);
-std::vector<std::pair<image_t, image_t>> SequentialPairs(const std::vector<image_t>& image_ids,
-                                                         int overlap);
 
 // Stages 2 and 3: matches SIFT descriptors of the selected pairs (ratio test, cross-check)
 // and verifies them geometrically (F/E/H with LO-RANSAC), writing matches and

@@ -151,8 +151,8 @@ TEST_F(FeatureMatchingTest, SequentialPairsFollowNamesAndResume) {
   // Pairs stored by an earlier, interrupted run: one fully verified, one with matches only.
   database.WriteTwoViewGeometry(5, 4, TwoViewGeometry());
   FeatureMatchingPipelineOptions options;
-  options.pair_mode = PairMode::kSequential;
-  options.sequential_overlap = 1;
+  options.pairs.mode = PairMode::kSequential;
+  options.pairs.sequential_overlap = 1;
   options.batch_size = 2;
   options.num_threads = 2;
   {
@@ -211,6 +211,51 @@ TEST_F(FeatureMatchingTest, PairsWithoutCommonPointsAreDegenerate) {
   EXPECT_EQ(stats.pairs[0].num_inliers, 0);
   EXPECT_EQ(database.ReadTwoViewGeometry(1, 2).config, TwoViewGeometry::kDegenerate);
   EXPECT_TRUE(database.ExistsTwoViewGeometry(1, 2));
+}
+
+}  // namespace
+}  // namespace parallax
+
+namespace parallax {
+namespace {
+
+TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
+  Database database(dir_ / "database.db");
+  MakeScene(&database, 4, 150, 60);
+  // Two images of clutter only: they share nothing with anything.
+  const camera_t camera_id = database.ReadAllCameras().front().camera_id;
+  for (const std::string name : {"clutter1.png", "clutter2.png"}) {
+    FeatureKeypoints keypoints;
+    FeatureDescriptors descriptors(200, 128);
+    for (int k = 0; k < 200; ++k) {
+      keypoints.emplace_back(static_cast<float>(RandomUniformReal(0, 640)),
+                             static_cast<float>(RandomUniformReal(0, 480)));
+      for (int d = 0; d < 128; ++d) descriptors(k, d) = static_cast<uint8_t>(RandomUniformInteger(0, 255));
+    }
+    database.WriteImageWithFeatures(name, camera_id, keypoints, descriptors);
+  }
+  FeatureMatchingPipelineOptions options;
+  options.num_threads = 2;
+  options.preemptive.enabled = true;
+  options.preemptive.num_features = 50;
+  const FeatureMatchingStats stats = MatchAndVerify(options, &database);
+  EXPECT_TRUE(stats.preemptive);
+  EXPECT_EQ(stats.num_pairs, 15u);
+  // The 9 pairs with a clutter image are stopped; the 6 scene pairs all pass and verify.
+  EXPECT_EQ(stats.num_preemptive_rejected, 9u);
+  EXPECT_EQ(stats.num_verified, 6u);
+  for (const PairMatchStats& pair : stats.pairs) {
+    EXPECT_GE(pair.num_preemptive_matches, 0);
+    EXPECT_EQ(pair.preemptive_rejected, pair.num_preemptive_matches < options.preemptive.min_matches);
+    if (pair.preemptive_rejected) {
+      EXPECT_EQ(pair.num_putative, 0);
+      EXPECT_EQ(pair.config, TwoViewGeometry::kDegenerate);
+    }
+  }
+  // Stopped pairs are stored: a rerun does not test them again.
+  const FeatureMatchingStats again = MatchAndVerify(options, &database);
+  EXPECT_EQ(again.num_skipped, 15u);
+  EXPECT_EQ(again.num_matched, 0u);
 }
 
 }  // namespace

@@ -76,10 +76,7 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
                                 {"images_skipped_already_stored", result.extraction.num_skipped},
                                 {"unreadable", result.extraction.failed.size()},
                                 {"mean_keypoints", result.extraction.mean_num_keypoints}};
-  result.summary["matching"] = {{"pairs", result.matching.num_pairs},
-                                {"pairs_matched", result.matching.num_matched},
-                                {"pairs_skipped_already_stored", result.matching.num_skipped},
-                                {"pairs_verified", result.matching.num_verified}};
+  result.summary["matching"] = MatchingSummary(result.matching);
   WriteRunSummary(result.summary, output_dir / "summary.json");
   return result;
 }

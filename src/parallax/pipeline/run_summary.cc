@@ -83,6 +83,31 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   return summary;
 }
 
+nlohmann::json MatchingSummary(const FeatureMatchingStats& stats) {
+  nlohmann::json modes = nlohmann::json::array();
+  for (const PairMode mode : stats.selection.modes) modes.push_back(PairModeName(mode));
+  nlohmann::json summary = {{"pair_modes", modes},
+                            {"pair_choice", stats.selection.reason},
+                            {"pairs_considered", stats.num_pairs},
+                            {"pairs_skipped_already_stored", stats.num_skipped},
+                            {"pairs_matched", stats.num_matched},
+                            {"preemptive", stats.preemptive},
+                            {"pairs_stopped_by_preemptive_test", stats.num_preemptive_rejected},
+                            {"pairs_verified", stats.num_verified},
+                            {"pair_selection_seconds", stats.selection.seconds},
+                            {"seconds", stats.seconds},
+                            {"matching_thread_seconds", stats.matching_thread_seconds},
+                            {"verification_thread_seconds", stats.verification_thread_seconds}};
+  if (stats.selection.num_retrieval_pairs > 0) summary["retrieval_pairs"] = stats.selection.num_retrieval_pairs;
+  if (stats.selection.num_spatial_pairs > 0) summary["spatial_pairs"] = stats.selection.num_spatial_pairs;
+  if (stats.selection.num_loop_pairs > 0) summary["loop_pairs"] = stats.selection.num_loop_pairs;
+  if (!stats.selection.vocab_tree_path.empty()) {
+    summary["vocab_tree"] = stats.selection.vocab_tree_path.string();
+    summary["vocab_tree_trained"] = stats.selection.trained_vocab_tree;
+  }
+  return summary;
+}
+
 void WriteRunSummary(const nlohmann::json& summary, const std::filesystem::path& path) {
   WriteTextFileAtomically(path, summary.dump(2) + "\n");
 }

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "parallax/pipeline/feature_matching.h"
 #include "parallax/pipeline/mapping_stage.h"
 
 namespace parallax {
@@ -16,6 +17,10 @@ using StageTimings = std::vector<std::pair<std::string, double>>;
 // error, per-stage wall times, and per image its keypoints, observations, reprojection error
 // before and after bundle adjustment, and the reason when it was not registered.
 nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimings& timings);
+
+// The matching stage: how pairs were chosen and why, pairs considered, matched, stopped by
+// the preemptive test, verified, and the time of each part.
+nlohmann::json MatchingSummary(const FeatureMatchingStats& stats);
 
 void WriteRunSummary(const nlohmann::json& summary, const std::filesystem::path& path);
 

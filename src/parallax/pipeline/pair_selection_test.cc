@@ -1,0 +1,209 @@
+#include "parallax/pipeline/pair_selection.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "parallax/pipeline/feature_extraction.h"
+#include "parallax/render/synthetic_scene.h"
+#include "parallax/util/check.h"
+#include "parallax/util/test_dir.h"
+
+namespace parallax {
+namespace {
+
+namespace fs = std::filesystem;
+using ImagePair = std::pair<image_t, image_t>;
+
+std::set<ImagePair> AsSet(const std::vector<ImagePair>& pairs) {
+  std::set<ImagePair> set;
+  for (auto [a, b] : pairs) set.insert({std::min(a, b), std::max(a, b)});
+  return set;
+}
+
+TEST(PairSelection, ModeNamesRoundTrip) {
+  for (const PairMode mode : {PairMode::kAuto, PairMode::kExhaustive, PairMode::kSequential,
+                              PairMode::kRetrieval, PairMode::kSpatial}) {
+    EXPECT_EQ(PairModeFromName(PairModeName(mode)), mode);
+  }
+  EXPECT_FALSE(PairModeFromName("vocab_tree").has_value());
+}
+
+TEST(PairSelection, SpatialPairsAreNearestWithinRadius) {
+  // A 5 x 4 grid, 10 m apart, and one image 1 km away.
+  std::vector<std::pair<image_t, Eigen::Vector3d>> positions;
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 5; ++x) positions.emplace_back(1 + x + 5 * y, Eigen::Vector3d(10.0 * x, 10.0 * y, 0));
+  }
+  positions.emplace_back(99, Eigen::Vector3d(1000, 0, 0));
+  SpatialPairOptions options;
+  options.num_neighbors = 4;
+  options.max_distance = 10.5;
+  const std::set<ImagePair> pairs = AsSet(SpatialPairs(positions, options));
+  // Within 10.5 m only the 4-neighbourhood: 4 * 4 horizontal + 5 * 3 vertical edges.
+  EXPECT_EQ(pairs.size(), 31u);
+  for (const auto& [a, b] : pairs) {
+    EXPECT_NE(b, 99u);
+    const int dx = std::abs(static_cast<int>((a - 1) % 5) - static_cast<int>((b - 1) % 5));
+    const int dy = std::abs(static_cast<int>((a - 1) / 5) - static_cast<int>((b - 1) / 5));
+    EXPECT_EQ(dx + dy, 1) << a << " " << b;
+  }
+  // One neighbour each, any distance: every image pairs with a nearest one, 99 included.
+  options.num_neighbors = 1;
+  options.max_distance = 1e6;
+  const std::set<ImagePair> nearest = AsSet(SpatialPairs(positions, options));
+  EXPECT_TRUE(nearest.count({5, 99}) > 0);  // Image 5 at (40, 0) is the nearest to 99.
+  EXPECT_LE(nearest.size(), positions.size());
+}
+
+TEST(PairSelection, LoopClosingPairsJoinImagesWithCommonNeighbours) {
+  // A square 1-2-3-4 verified along its sides, a tail 4-5, and 6-7 alone.
+  const std::vector<std::pair<image_pair_t, int>> verified = {
+      {ImagePairToPairId(1, 2), 100}, {ImagePairToPairId(2, 3), 100}, {ImagePairToPairId(3, 4), 100},
+      {ImagePairToPairId(4, 1), 100}, {ImagePairToPairId(4, 5), 100}, {ImagePairToPairId(6, 7), 100}};
+  const std::set<ImagePair> pairs = AsSet(LoopClosingPairs(verified, {1, 2, 3, 4, 5, 6, 7}, 5));
+  // The diagonals have two common neighbours; 5 shares only 4 with 1 and 3: not enough.
+  EXPECT_EQ(pairs, (std::set<ImagePair>{{1, 3}, {2, 4}}));
+  EXPECT_TRUE(LoopClosingPairs(verified, {1, 2, 3, 4, 5, 6, 7}, 0).empty());
+}
+
+TEST(PairSelection, LocalityOrderKeepsEveryPairOnce) {
+  const std::vector<ImagePair> pairs = {{5, 9}, {1, 2}, {9, 2}, {3, 4}, {1, 9}};
+  const std::vector<ImagePair> ordered = OrderPairsForLocality(pairs, {1, 2, 3, 4, 5, 9});
+  EXPECT_EQ(AsSet(ordered), AsSet(pairs));
+  EXPECT_EQ(ordered.size(), pairs.size());
+  // Breadth-first from image 1: its pairs come first.
+  EXPECT_EQ(ordered.front(), (ImagePair{1, 2}));
+}
+
+// A small rendered survey: retrieval pairs overlapping views, the trained tree is saved and
+// reused, auto picks by size and adds GPS neighbours.
+class AerialPairSelectionTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::ScopedTestDir("parallax_pair_selection_test");
+    SyntheticSceneOptions scene;
+    scene.layout = SyntheticSceneOptions::Layout::kAerial;
+    scene.num_views = 24;
+    scene.num_threads = 2;
+    GenerateSyntheticScene(scene, dir_->path() / "images");
+    Database database(dir_->path() / "database.db");
+    FeatureExtractionOptions extraction;
+    extraction.num_threads = 2;
+    ExtractFeatures(extraction, dir_->path() / "images", &database);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+
+  // Ground-truth pairs with at least `min_shared` scene points, by image id.
+  static std::map<ImagePair, int> TruthPairs(const Database& database) {
+    std::map<std::string, image_t> id_of_name;
+    for (const Image& image : database.ReadAllImages()) id_of_name[image.name] = image.image_id;
+    std::map<ImagePair, int> truth;
+    std::ifstream stream(dir_->path() / "images" / "gt" / "overlap_pairs.txt");
+    std::string name1, name2;
+    int shared = 0;
+    while (stream >> name1 >> name2 >> shared) {
+      const image_t a = id_of_name.at(name1), b = id_of_name.at(name2);
+      truth[{std::min(a, b), std::max(a, b)}] = shared;
+    }
+    return truth;
+  }
+
+  static std::vector<image_t> ImageIds(const Database& database) {
+    std::vector<image_t> ids;
+    for (const Image& image : database.ReadAllImages()) ids.push_back(image.image_id);
+    return ids;
+  }
+
+  static test::ScopedTestDir* dir_;
+};
+test::ScopedTestDir* AerialPairSelectionTest::dir_ = nullptr;
+
+TEST_F(AerialPairSelectionTest, RetrievalFindsOverlappingViewsAndSavesItsTree) {
+  const Database database(dir_->path() / "database.db");
+  ASSERT_EQ(database.NumImages(), 24u);
+  const std::map<ImagePair, int> truth = TruthPairs(database);
+  PairSelectionOptions options;
+  options.mode = PairMode::kRetrieval;
+  options.retrieval.num_neighbors = 5;
+  options.retrieval.tree.depth = 3;
+  options.num_threads = 2;
+  const PairSelection selection = SelectPairs(options, ImageIds(database), database);
+  EXPECT_TRUE(selection.trained_vocab_tree);
+  EXPECT_EQ(selection.vocab_tree_path, DefaultVocabTreePath(database.Path()));
+  EXPECT_TRUE(fs::exists(selection.vocab_tree_path));
+  ASSERT_FALSE(selection.pairs.empty());
+  EXPECT_LE(selection.pairs.size(), 24u * 5u);
+  // Retrieved pairs overlap: most share 100 scene points or more (roofs, streets and fields
+  // repeat, so some look alike without overlapping), and nearly every image finds such a partner.
+  int overlapping = 0;
+  std::set<image_t> with_partner;
+  for (const auto& [a, b] : AsSet(selection.pairs)) {
+    const auto it = truth.find({a, b});
+    if (it == truth.end() || it->second < 100) continue;
+    ++overlapping;
+    with_partner.insert(a);
+    with_partner.insert(b);
+  }
+  EXPECT_GE(overlapping, 0.75 * selection.pairs.size()) << overlapping << " of " << selection.pairs.size();
+  EXPECT_GE(with_partner.size(), 21u);  // Oblique views at the edge may find none.
+
+  // A second selection reads the saved tree and gives the same pairs.
+  const PairSelection again = SelectPairs(options, ImageIds(database), database);
+  EXPECT_FALSE(again.trained_vocab_tree);
+  EXPECT_EQ(again.pairs, selection.pairs);
+}
+
+TEST_F(AerialPairSelectionTest, AutoChoosesBySizeAndAddsGpsNeighbours) {
+  const Database database(dir_->path() / "database.db");
+  // Every view carries its EXIF GPS position, a few metres off the truth.
+  EXPECT_EQ(database.ReadImageGpsPriors().size(), 24u);
+  PairSelectionOptions options;
+  options.num_threads = 2;
+  options.retrieval.tree.depth = 3;
+  options.retrieval.vocab_tree_path.clear();
+  const PairSelection small = SelectPairs(options, ImageIds(database), database);
+  EXPECT_EQ(small.modes, std::vector<PairMode>{PairMode::kExhaustive});
+  EXPECT_EQ(small.pairs.size(), 24u * 23u / 2u);
+  options.auto_exhaustive_max_images = 10;
+  const PairSelection large = SelectPairs(options, ImageIds(database), database);
+  EXPECT_EQ(large.modes, (std::vector<PairMode>{PairMode::kRetrieval, PairMode::kSpatial}));
+  EXPECT_GT(large.num_spatial_pairs, 0u);
+  EXPECT_NE(large.reason.find("GPS"), std::string::npos) << large.reason;
+  // GPS neighbours within 150 m of a survey flown 60 m up overlap nearly always.
+  const std::map<ImagePair, int> truth = TruthPairs(database);
+  options.mode = PairMode::kSpatial;
+  options.spatial.num_neighbors = 4;
+  const PairSelection spatial = SelectPairs(options, ImageIds(database), database);
+  int overlapping = 0;
+  for (const auto& pair : AsSet(spatial.pairs)) overlapping += truth.count(pair) > 0 ? 1 : 0;
+  EXPECT_GE(overlapping, 0.9 * spatial.pairs.size()) << overlapping << " of " << spatial.pairs.size();
+}
+
+TEST_F(AerialPairSelectionTest, BadTreeFileNamesItself) {
+  const Database database(dir_->path() / "database.db");
+  const fs::path truncated = dir_->path() / "truncated.vocab_tree";
+  {
+    std::ofstream stream(truncated, std::ios::binary);
+    stream << "PLXVOCAB\x01";
+  }
+  PairSelectionOptions options;
+  options.mode = PairMode::kRetrieval;
+  options.retrieval.vocab_tree_path = truncated;
+  try {
+    SelectPairs(options, ImageIds(database), database);
+    FAIL() << "a truncated tree was accepted";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find(truncated.string()), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+}
+
+}  // namespace
+}  // namespace parallax
