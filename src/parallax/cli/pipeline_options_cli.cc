@@ -109,11 +109,9 @@ void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) 
                  "Spatial: farthest GPS distance of a pair, metres")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  auto* preemptive_flag = app.add_flag("--preemptive", preemptive_,
-                                       "Match each pair's largest features first and skip pairs "
-                                       "that find too few (Wu 2013; default: per mode, see docs)");
-  app.add_flag("--no-preemptive", no_preemptive_, "Never skip a pair by the preemptive test")
-      ->excludes(preemptive_flag);
+  app.add_flag("--preemptive,!--no-preemptive", options->preemptive.enabled,
+               "Match each pair's largest features first and skip pairs that find too few (Wu "
+               "2013; off by default, see docs/pair-selection.md)");
   app.add_option("--preemptive-features", options->preemptive.num_features,
                  "Preemptive test: largest-scale features matched per image")
       ->capture_default_str()
@@ -138,8 +136,6 @@ void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) 
 
 void MatchingFlags::Apply(FeatureMatchingPipelineOptions* options) const {
   options->pairs.mode = *PairModeFromName(pair_mode_);
-  if (preemptive_) options->preemptive.enabled = true;
-  if (no_preemptive_) options->preemptive.enabled = false;
   if (no_cross_check_) options->matching.cross_check = false;
 }
 

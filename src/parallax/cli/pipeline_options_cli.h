@@ -29,8 +29,6 @@ class MatchingFlags {
  private:
   std::string pair_mode_ = "auto";
   bool no_cross_check_ = false;
-  bool preemptive_ = false;
-  bool no_preemptive_ = false;
 };
 
 }  // namespace parallax::cli

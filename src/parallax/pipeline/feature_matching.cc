@@ -65,11 +65,6 @@ void PreemptiveMatchingOptions::Check() const {
   PARALLAX_CHECK_LE(max_ratio, 1.0);
 }
 
-bool PreemptiveByDefault(const PairSelection& selection) {
-  (void)selection;
-  return false;
-}
-
 void FeatureMatchingPipelineOptions::Check() const {
   matching.Check();
   geometry.Check();
@@ -113,7 +108,7 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
   const std::vector<std::pair<image_t, image_t>> all_pairs = std::move(selection.pairs);
   selection.pairs.clear();
   stats.selection = selection;
-  stats.preemptive = options.preemptive.enabled.value_or(PreemptiveByDefault(selection));
+  stats.preemptive = options.preemptive.enabled;
   stats.num_pairs = all_pairs.size();
   std::vector<std::pair<image_t, image_t>> pairs;
   for (const auto& pair : all_pairs) {

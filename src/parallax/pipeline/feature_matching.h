@@ -17,9 +17,9 @@ namespace parallax {
 // features are the ones both views of an overlapping pair see (small ones vanish at the
 // coarser scale of either view), so few matches among them mean little overlap.
 struct PreemptiveMatchingOptions {
-  // Unset: on for the modes where it was measured to lose no pair that matters (see
-  // PreemptiveByDefault); true or false: as given.
-  std::optional<bool> enabled;
+  // Off by default: on templeRing every setting that saves time also loses verified pairs
+  // of 17 to 80 inliers (its largest features are the silhouette's, see docs/pair-selection.md).
+  bool enabled = false;
   // Largest-scale features per image matched first (Wu: 100).
   int num_features = 100;
   // Fewer matches among those and the full match is skipped (Wu: 4).
@@ -28,9 +28,6 @@ struct PreemptiveMatchingOptions {
   double max_ratio = 0.0;
   void Check() const;
 };
-
-// Whether preemptive matching is on for a selection when not set explicitly.
-bool PreemptiveByDefault(const PairSelection& selection);
 
 struct FeatureMatchingPipelineOptions {
   FeatureMatchingOptions matching;  // Ratio test, distance bound, cross-check.
