@@ -87,6 +87,9 @@ class AerialPairSelectionTest : public ::testing::Test {
     SyntheticSceneOptions scene;
     scene.layout = SyntheticSceneOptions::Layout::kAerial;
     scene.num_views = 24;
+    // Quarter-size views keep the suite fast (also under the sanitizers).
+    scene.width = 320;
+    scene.height = 240;
     scene.num_threads = 2;
     GenerateSyntheticScene(scene, dir_->path() / "images");
     Database database(dir_->path() / "database.db");
