@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <unordered_map>
 
 #include "parallax/util/check.h"
@@ -60,6 +61,8 @@ Eigen::AlignedBox2d ViewFootprint(const Camera& camera, const Rigid3d& cam_from_
 
 void CovisibilityOptions::Check() const {
   PARALLAX_CHECK_GT(point_spacing, 0.0);
+  PARALLAX_CHECK_GT(max_incidence_degrees, 0.0);
+  PARALLAX_CHECK_LE(max_incidence_degrees, 90.0);
   PARALLAX_CHECK_GE(min_shared_points, 1);
   PARALLAX_CHECK_GT(max_distance, 0.0);
 }
@@ -77,8 +80,11 @@ std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene, const 
     footprints[i] = ViewFootprint(views.GetCamera(image.camera_id), image.cam_from_world, top, options.max_distance);
     ground_region.extend(footprints[i]);
   }
-  const std::vector<Eigen::Vector3d> points = scene.SampleSurfacePoints(options.point_spacing, ground_region, options.seed);
+  const std::vector<SurfacePoint> samples = scene.SampleSurfacePoints(options.point_spacing, ground_region, options.seed);
+  std::vector<Eigen::Vector3d> points(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) points[i] = samples[i].position;
   const PointGrid grid(points, 8.0);
+  const double min_cosine = std::cos(options.max_incidence_degrees * std::numbers::pi / 180.0);
 
   // The points each view sees, in increasing index order.
   std::vector<std::vector<uint32_t>> seen(image_ids.size());
@@ -92,6 +98,7 @@ std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene, const 
       if (point_in_cam.z() <= 0.0) return;
       const double distance = (point - center).norm();
       if (distance > options.max_distance) return;
+      if (std::abs(samples[index].normal.dot(point - center)) < min_cosine * distance) return;
       const Eigen::Vector2d xy = camera.ImgFromCam(point_in_cam);
       if (xy.x() < 0.0 || xy.y() < 0.0 || xy.x() >= camera.width || xy.y() >= camera.height) return;
       // Stop a little short of the point: its own surface must not count as blocking it.

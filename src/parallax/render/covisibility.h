@@ -14,6 +14,9 @@ struct CovisibilityOptions {
   int min_shared_points = 30;
   // Points farther than this from a camera do not count as seen (a horizon for oblique views).
   double max_distance = 400.0;
+  // Nor do points whose surface the ray meets more obliquely than this (degrees from the
+  // normal): a wall seen edge-on from above shows no texture to match, though it is in view.
+  double max_incidence_degrees = 75.0;
   // Seed of the jittered sample positions.
   uint64_t seed = 0;
   // Worker threads (<= 0: all cores).
@@ -30,8 +33,8 @@ struct CovisiblePair {
 
 // Which registered views of `views` see the same part of `scene`: points are sampled on its
 // surfaces (SceneModel::SampleSurfacePoints, the ground inside what the views see), a point
-// is seen by a view when it projects inside the image, lies in front of the camera and
-// nothing blocks the ray between them. Pairs sorted by ids. The ground truth that pair
+// is seen by a view when it projects inside the image, lies in front of the camera, faces it
+// within max_incidence_degrees and nothing blocks the ray between them. Pairs sorted by ids. The ground truth that pair
 // selection (retrieval, GPS neighbours) is measured against.
 std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene, const Reconstruction& views,
                                                  const CovisibilityOptions& options);

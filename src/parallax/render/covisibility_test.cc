@@ -51,6 +51,13 @@ TEST(Covisibility, SharedPointsFallWithDistance) {
   EXPECT_GT(near, 2 * far);
   EXPECT_EQ(shared.count({1, 4}), 0u);
   EXPECT_EQ(shared.count({3, 4}), 0u);
+
+  // Counting the walls seen edge-on too adds points, never removes any.
+  options.max_incidence_degrees = 90.0;
+  for (const CovisiblePair& pair : ComputeCovisiblePairs(scene, views, options)) {
+    const auto it = shared.find({pair.image_id1, pair.image_id2});
+    EXPECT_GE(pair.num_shared_points, it == shared.end() ? 0 : it->second);
+  }
 }
 
 TEST(Covisibility, SurfacePointsLieOnTheScene) {
@@ -58,13 +65,14 @@ TEST(Covisibility, SurfacePointsLieOnTheScene) {
   scene_options.kind = SceneModelOptions::Kind::kTown;
   scene_options.town_half_size = 100;
   const SceneModel scene(scene_options);
-  const std::vector<Eigen::Vector3d> points =
+  const std::vector<SurfacePoint> samples =
       scene.SampleSurfacePoints(2.0, Eigen::AlignedBox2d(Eigen::Vector2d(-20, -20), Eigen::Vector2d(20, 20)), 7);
-  ASSERT_GT(points.size(), 400u);  // The 40 x 40 m ground alone gives 400.
+  ASSERT_GT(samples.size(), 400u);  // The 40 x 40 m ground alone gives 400.
   // Every point is on the ground or in a building's box; a ray cast straight down onto a
   // ground point meets nothing below a building's top.
   int checked = 0;
-  for (const Eigen::Vector3d& point : points) {
+  for (const auto& [point, normal] : samples) {
+    EXPECT_NEAR(normal.norm(), 1.0, 1e-9);
     EXPECT_TRUE(point.z() == 0.0 || scene.Bounds().exteriorDistance(point) < 1e-6);
     if (point.z() != 0.0) continue;
     const Eigen::Vector3d origin = point + Eigen::Vector3d(0.0, 0.0, 50.0);

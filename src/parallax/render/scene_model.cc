@@ -72,24 +72,25 @@ SceneModel::SceneModel(const SceneModelOptions& options) : options_(options) {
   BuildNode(0, static_cast<int>(primitives_.size()));
 }
 
-std::vector<Eigen::Vector3d> SceneModel::SampleSurfacePoints(double spacing,
-                                                             const Eigen::AlignedBox2d& ground_region,
-                                                             uint64_t seed) const {
+std::vector<SurfacePoint> SceneModel::SampleSurfacePoints(double spacing,
+                                                          const Eigen::AlignedBox2d& ground_region,
+                                                          uint64_t seed) const {
   PARALLAX_CHECK_GT(spacing, 0.0);
   std::mt19937_64 engine(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<Eigen::Vector3d> points;
+  std::vector<SurfacePoint> points;
   // A jittered grid on a parallelogram `origin + s * edge1 + t * edge2`, s, t in [0, 1];
   // `triangle` keeps the half with s + t <= 1.
   const auto sample_patch = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& edge1,
                                 const Eigen::Vector3d& edge2, bool triangle) {
+    const Eigen::Vector3d normal = edge1.cross(edge2).normalized();
     const int n1 = std::max(1, static_cast<int>(std::ceil(edge1.norm() / spacing)));
     const int n2 = std::max(1, static_cast<int>(std::ceil(edge2.norm() / spacing)));
     for (int i = 0; i < n1; ++i) {
       for (int j = 0; j < n2; ++j) {
         const double s = (i + unit(engine)) / n1, t = (j + unit(engine)) / n2;
         if (triangle && s + t > 1.0) continue;
-        points.push_back(origin + s * edge1 + t * edge2);
+        points.push_back({origin + s * edge1 + t * edge2, normal});
       }
     }
   };
@@ -118,9 +119,12 @@ std::vector<Eigen::Vector3d> SceneModel::SampleSurfacePoints(double spacing,
         for (int i = 0; i < n; ++i) {
           for (int j = 0; j < m; ++j) {
             const double angle = 2 * std::numbers::pi * (i + unit(engine)) / n;
-            points.emplace_back(primitive.center.x() + primitive.radius * std::cos(angle),
-                                primitive.center.y() + primitive.radius * std::sin(angle),
-                                primitive.box.min().z() + height * (j + unit(engine)) / m);
+            const Eigen::Vector3d normal(std::cos(angle), std::sin(angle), 0.0);
+            const Eigen::Vector3d position =
+                Eigen::Vector3d(primitive.center.x(), primitive.center.y(),
+                                primitive.box.min().z() + height * (j + unit(engine)) / m) +
+                primitive.radius * normal;
+            points.push_back({position, normal});
           }
         }
         break;

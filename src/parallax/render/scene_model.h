@@ -30,6 +30,12 @@ struct SceneModelOptions {
   void Check() const;
 };
 
+// A point on a surface and the surface's unit normal there (either side).
+struct SurfacePoint {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+};
+
 // A ray's nearest surface.
 struct SurfaceHit {
   // Ray parameter: distance from the origin along the unit direction.
@@ -78,7 +84,7 @@ class SceneModel {
   // Points about `spacing` metres apart on every surface: a jittered grid on the ground
   // inside `ground_region` (x, y), and on each primitive's faces but the bottom ones. The
   // ground truth of which views see the same part of the scene. Deterministic for a seed.
-  std::vector<Eigen::Vector3d> SampleSurfacePoints(double spacing, const Eigen::AlignedBox2d& ground_region,
+  std::vector<SurfacePoint> SampleSurfacePoints(double spacing, const Eigen::AlignedBox2d& ground_region,
                                                    uint64_t seed) const;
 
   const SceneModelOptions& Options() const { return options_; }
