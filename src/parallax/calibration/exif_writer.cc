@@ -14,7 +14,9 @@ namespace {
 class IfdWriter {
  public:
   void Ascii(uint16_t tag, const std::string& text) { Add(tag, 2, text.size() + 1, text + '\0'); }
-  void Byte(uint16_t tag, uint8_t value) { Add(tag, 1, 1, std::string(1, static_cast<char>(value))); }
+  void Byte(uint16_t tag, uint8_t value) {
+    Add(tag, 1, 1, std::string(1, static_cast<char>(value)));
+  }
   void Short(uint16_t tag, uint16_t value) { Add(tag, 3, 1, Le16(value)); }
   void Long(uint16_t tag, uint32_t value) { Add(tag, 4, 1, Le32(value)); }
   void Rationals(uint16_t tag, const std::vector<double>& values) {
@@ -120,7 +122,8 @@ std::string EncodeExifTiff(const ExifData& exif) {
   const uint32_t exif_offset =
       kIfd0Offset + static_cast<uint32_t>(make_ifd0(0, 0).Serialize(kIfd0Offset).size());
   const uint32_t gps_offset =
-      exif_offset + (has_exif_ifd ? static_cast<uint32_t>(exif_ifd.Serialize(exif_offset).size()) : 0);
+      exif_offset +
+      (has_exif_ifd ? static_cast<uint32_t>(exif_ifd.Serialize(exif_offset).size()) : 0);
 
   std::string tiff = "II" + IfdWriter::Le16(42) + IfdWriter::Le32(kIfd0Offset);
   tiff += make_ifd0(exif_offset, gps_offset).Serialize(kIfd0Offset);

@@ -1,15 +1,14 @@
 #include "parallax/geometry/gps.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
-
-#include <Eigen/Geometry>
 
 namespace parallax {
 namespace {
 
-constexpr double kSemiMajorAxis = 6378137.0;              // WGS84 a, metres
-constexpr double kFlattening = 1.0 / 298.257223563;       // WGS84 f
+constexpr double kSemiMajorAxis = 6378137.0;                          // WGS84 a, metres
+constexpr double kFlattening = 1.0 / 298.257223563;                   // WGS84 f
 constexpr double kEccentricity2 = kFlattening * (2.0 - kFlattening);  // e^2
 constexpr double kRadians = std::numbers::pi / 180.0;
 
@@ -17,8 +16,8 @@ constexpr double kRadians = std::numbers::pi / 180.0;
 Eigen::Matrix3d EnuFromEcefRotation(const GeodeticPosition& origin) {
   const double lat = origin.latitude * kRadians, lon = origin.longitude * kRadians;
   Eigen::Matrix3d rotation;
-  rotation << -std::sin(lon), std::cos(lon), 0.0,                                             //
-      -std::sin(lat) * std::cos(lon), -std::sin(lat) * std::sin(lon), std::cos(lat),          //
+  rotation << -std::sin(lon), std::cos(lon), 0.0,                                     //
+      -std::sin(lat) * std::cos(lon), -std::sin(lat) * std::sin(lon), std::cos(lat),  //
       std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat);
   return rotation;
 }
@@ -49,9 +48,10 @@ GeodeticPosition GeodeticFromEcef(const Eigen::Vector3d& ecef) {
   }
   position.latitude = lat / kRadians;
   // Away from the poles the horizontal form is the well-conditioned one.
-  position.altitude = std::abs(std::cos(lat)) > 1e-6
-                          ? horizontal / std::cos(lat) - normal_radius
-                          : std::abs(ecef.z()) / std::abs(std::sin(lat)) - normal_radius * (1.0 - kEccentricity2);
+  position.altitude =
+      std::abs(std::cos(lat)) > 1e-6
+          ? horizontal / std::cos(lat) - normal_radius
+          : std::abs(ecef.z()) / std::abs(std::sin(lat)) - normal_radius * (1.0 - kEccentricity2);
   return position;
 }
 

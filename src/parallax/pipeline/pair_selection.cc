@@ -30,11 +30,12 @@ std::vector<ImagePair> UniquePairs(std::vector<ImagePair> pairs) {
 // A uniform sample of about `max_descriptors` of the collection's descriptors, the same
 // share from every image, as unit rows.
 VocabularyTree::RowMatrixXf SampleTrainingDescriptors(const std::vector<image_t>& image_ids,
-                                                       const Database& database, int max_descriptors,
-                                                       uint64_t seed) {
+                                                      const Database& database, int max_descriptors,
+                                                      uint64_t seed) {
   size_t total = 0;
   for (const image_t image_id : image_ids) total += database.NumKeypoints(image_id);
-  const double share = total == 0 ? 1.0 : std::min(1.0, static_cast<double>(max_descriptors) / total);
+  const double share =
+      total == 0 ? 1.0 : std::min(1.0, static_cast<double>(max_descriptors) / total);
   std::mt19937_64 engine(seed);
   std::vector<MatchableDescriptors> parts;
   Eigen::Index num_rows = 0, dimension = 0;
@@ -46,7 +47,8 @@ VocabularyTree::RowMatrixXf SampleTrainingDescriptors(const std::vector<image_t>
     rows.resize(static_cast<size_t>(std::ceil(share * rows.size())));
     std::sort(rows.begin(), rows.end());
     FeatureDescriptors sample(static_cast<Eigen::Index>(rows.size()), descriptors.cols());
-    for (size_t i = 0; i < rows.size(); ++i) sample.row(static_cast<Eigen::Index>(i)) = descriptors.row(rows[i]);
+    for (size_t i = 0; i < rows.size(); ++i)
+      sample.row(static_cast<Eigen::Index>(i)) = descriptors.row(rows[i]);
     parts.push_back(PrepareDescriptors(sample));
     num_rows += sample.rows();
     dimension = std::max(dimension, sample.cols());
@@ -63,9 +65,11 @@ VocabularyTree::RowMatrixXf SampleTrainingDescriptors(const std::vector<image_t>
 
 // The tree to retrieve with: the given file, the one saved beside the database, or a new
 // one trained on the collection and saved there.
-VocabularyTree LoadOrTrainTree(const RetrievalPairOptions& options, const std::vector<image_t>& image_ids,
-                               const Database& database, int num_threads, PairSelection* selection) {
-  const int dimension = image_ids.empty() ? -1 : static_cast<int>(database.ReadDescriptors(image_ids[0]).cols());
+VocabularyTree LoadOrTrainTree(const RetrievalPairOptions& options,
+                               const std::vector<image_t>& image_ids, const Database& database,
+                               int num_threads, PairSelection* selection) {
+  const int dimension =
+      image_ids.empty() ? -1 : static_cast<int>(database.ReadDescriptors(image_ids[0]).cols());
   const std::filesystem::path saved = DefaultVocabTreePath(database.Path());
   if (!options.vocab_tree_path.empty() || std::filesystem::exists(saved)) {
     selection->vocab_tree_path = options.vocab_tree_path.empty() ? saved : options.vocab_tree_path;
@@ -74,22 +78,23 @@ VocabularyTree LoadOrTrainTree(const RetrievalPairOptions& options, const std::v
   const Timer timer;
   VocabularyTreeOptions tree_options = options.tree;
   tree_options.num_threads = num_threads;
-  const VocabularyTree::RowMatrixXf training =
-      SampleTrainingDescriptors(image_ids, database, tree_options.max_training_descriptors, tree_options.seed);
+  const VocabularyTree::RowMatrixXf training = SampleTrainingDescriptors(
+      image_ids, database, tree_options.max_training_descriptors, tree_options.seed);
   VocabularyTree tree = VocabularyTree::Train(training, tree_options);
   tree.Write(saved);
   selection->vocab_tree_path = saved;
   selection->trained_vocab_tree = true;
-  PARALLAX_LOG(Info) << "Retrieval: trained a vocabulary tree of " << tree.NumWords() << " words on "
-                     << training.rows() << " descriptors in " << timer.ElapsedSeconds() << " s; saved to "
-                     << saved.string();
+  PARALLAX_LOG(Info) << "Retrieval: trained a vocabulary tree of " << tree.NumWords()
+                     << " words on " << training.rows() << " descriptors in "
+                     << timer.ElapsedSeconds() << " s; saved to " << saved.string();
   return tree;
 }
 
 std::vector<ImagePair> SelectRetrievalPairs(const PairSelectionOptions& options,
-                                            const std::vector<image_t>& image_ids, const Database& database,
-                                            PairSelection* selection) {
-  const VocabularyTree tree = LoadOrTrainTree(options.retrieval, image_ids, database, options.num_threads, selection);
+                                            const std::vector<image_t>& image_ids,
+                                            const Database& database, PairSelection* selection) {
+  const VocabularyTree tree =
+      LoadOrTrainTree(options.retrieval, image_ids, database, options.num_threads, selection);
   const Timer timer;
   RetrievalIndex index(tree.NumWords());
   for (const image_t image_id : image_ids) {
@@ -103,8 +108,9 @@ std::vector<ImagePair> SelectRetrievalPairs(const PairSelectionOptions& options,
   return pairs;
 }
 
-std::vector<ImagePair> SelectSpatialPairs(const SpatialPairOptions& options, const std::vector<image_t>& image_ids,
-                                          const std::vector<std::pair<image_t, GeodeticPosition>>& gps) {
+std::vector<ImagePair> SelectSpatialPairs(
+    const SpatialPairOptions& options, const std::vector<image_t>& image_ids,
+    const std::vector<std::pair<image_t, GeodeticPosition>>& gps) {
   const std::set<image_t> wanted(image_ids.begin(), image_ids.end());
   std::vector<std::pair<image_t, Eigen::Vector3d>> positions;
   for (const auto& [image_id, position] : gps) {
@@ -129,11 +135,16 @@ std::optional<PairMode> PairModeFromName(const std::string& name) {
 
 std::string PairModeName(PairMode mode) {
   switch (mode) {
-    case PairMode::kAuto: return "auto";
-    case PairMode::kExhaustive: return "exhaustive";
-    case PairMode::kSequential: return "sequential";
-    case PairMode::kRetrieval: return "retrieval";
-    case PairMode::kSpatial: return "spatial";
+    case PairMode::kAuto:
+      return "auto";
+    case PairMode::kExhaustive:
+      return "exhaustive";
+    case PairMode::kSequential:
+      return "sequential";
+    case PairMode::kRetrieval:
+      return "retrieval";
+    case PairMode::kSpatial:
+      return "spatial";
   }
   return "unknown";
 }
@@ -190,8 +201,9 @@ std::vector<ImagePair> SequentialPairs(const std::vector<image_t>& image_ids, in
   return pairs;
 }
 
-std::vector<ImagePair> SpatialPairs(const std::vector<std::pair<image_t, Eigen::Vector3d>>& positions,
-                                    const SpatialPairOptions& options) {
+std::vector<ImagePair> SpatialPairs(
+    const std::vector<std::pair<image_t, Eigen::Vector3d>>& positions,
+    const SpatialPairOptions& options) {
   options.Check();
   std::vector<ImagePair> pairs;
   // Brute force: 10,000 images are 10^8 distances, well under a second.
@@ -200,7 +212,8 @@ std::vector<ImagePair> SpatialPairs(const std::vector<std::pair<image_t, Eigen::
     neighbors.clear();
     for (size_t j = 0; j < positions.size(); ++j) {
       const double distance = (positions[i].second - positions[j].second).norm();
-      if (j != i && distance <= options.max_distance) neighbors.emplace_back(distance, positions[j].first);
+      if (j != i && distance <= options.max_distance)
+        neighbors.emplace_back(distance, positions[j].first);
     }
     const size_t keep = std::min(neighbors.size(), static_cast<size_t>(options.num_neighbors));
     std::partial_sort(neighbors.begin(), neighbors.begin() + keep, neighbors.end());
@@ -209,8 +222,8 @@ std::vector<ImagePair> SpatialPairs(const std::vector<std::pair<image_t, Eigen::
   return UniquePairs(std::move(pairs));
 }
 
-std::vector<ImagePair> RetrievalPairs(const RetrievalIndex& index, const std::vector<image_t>& image_ids,
-                                      int num_neighbors) {
+std::vector<ImagePair> RetrievalPairs(const RetrievalIndex& index,
+                                      const std::vector<image_t>& image_ids, int num_neighbors) {
   PARALLAX_CHECK_GT(num_neighbors, 0);
   std::vector<ImagePair> pairs;
   for (const image_t image_id : image_ids) {
@@ -253,17 +266,21 @@ std::vector<ImagePair> LoopClosingPairs(const std::vector<std::pair<image_pair_t
       if (score.first >= 2) ranked.emplace_back(score.first, score.second, other);
     }
     const size_t keep = std::min(ranked.size(), static_cast<size_t>(num_neighbors));
-    std::partial_sort(ranked.begin(), ranked.begin() + keep, ranked.end(), [](const auto& a, const auto& b) {
-      if (std::get<0>(a) != std::get<0>(b)) return std::get<0>(a) > std::get<0>(b);
-      if (std::get<1>(a) != std::get<1>(b)) return std::get<1>(a) > std::get<1>(b);
-      return std::get<2>(a) < std::get<2>(b);
-    });
+    std::partial_sort(ranked.begin(), ranked.begin() + keep, ranked.end(),
+                      [](const auto& a, const auto& b) {
+                        if (std::get<0>(a) != std::get<0>(b))
+                          return std::get<0>(a) > std::get<0>(b);
+                        if (std::get<1>(a) != std::get<1>(b))
+                          return std::get<1>(a) > std::get<1>(b);
+                        return std::get<2>(a) < std::get<2>(b);
+                      });
     for (size_t k = 0; k < keep; ++k) pairs.emplace_back(image_id, std::get<2>(ranked[k]));
   }
   return UniquePairs(std::move(pairs));
 }
 
-std::vector<ImagePair> OrderPairsForLocality(std::vector<ImagePair> pairs, const std::vector<image_t>& image_ids) {
+std::vector<ImagePair> OrderPairsForLocality(std::vector<ImagePair> pairs,
+                                             const std::vector<image_t>& image_ids) {
   std::unordered_map<image_t, std::vector<image_t>> neighbors;
   for (const auto& [a, b] : pairs) {
     neighbors[a].push_back(b);
@@ -292,7 +309,8 @@ std::vector<ImagePair> OrderPairsForLocality(std::vector<ImagePair> pairs, const
     if (rank[pair.first] > rank[pair.second]) std::swap(pair.first, pair.second);
   }
   std::sort(pairs.begin(), pairs.end(), [&rank](const ImagePair& a, const ImagePair& b) {
-    return std::make_pair(rank.at(a.first), rank.at(a.second)) < std::make_pair(rank.at(b.first), rank.at(b.second));
+    return std::make_pair(rank.at(a.first), rank.at(a.second)) <
+           std::make_pair(rank.at(b.first), rank.at(b.second));
   });
   return pairs;
 }
@@ -302,13 +320,14 @@ std::filesystem::path DefaultVocabTreePath(const std::filesystem::path& database
   return path.replace_extension(".vocab_tree");
 }
 
-PairSelection SelectPairs(const PairSelectionOptions& options, const std::vector<image_t>& image_ids,
-                          const Database& database) {
+PairSelection SelectPairs(const PairSelectionOptions& options,
+                          const std::vector<image_t>& image_ids, const Database& database) {
   options.Check();
   const Timer timer;
   PairSelection selection;
   std::vector<std::pair<image_t, GeodeticPosition>> gps;
-  if (options.mode == PairMode::kAuto || options.mode == PairMode::kSpatial) gps = database.ReadImageGpsPriors();
+  if (options.mode == PairMode::kAuto || options.mode == PairMode::kSpatial)
+    gps = database.ReadImageGpsPriors();
   const size_t n = image_ids.size();
   switch (options.mode) {
     case PairMode::kAuto:
@@ -322,7 +341,8 @@ PairSelection SelectPairs(const PairSelectionOptions& options, const std::vector
                            std::to_string(options.auto_exhaustive_max_images) + ": retrieval";
         if (gps.size() >= options.auto_spatial_min_gps_share * n && !gps.empty()) {
           selection.modes.push_back(PairMode::kSpatial);
-          selection.reason += ", plus GPS neighbours (" + std::to_string(gps.size()) + " images have a position)";
+          selection.reason +=
+              ", plus GPS neighbours (" + std::to_string(gps.size()) + " images have a position)";
         }
       }
       break;
@@ -342,14 +362,16 @@ PairSelection SelectPairs(const PairSelectionOptions& options, const std::vector
         selection.pairs = SequentialPairs(image_ids, options.sequential_overlap);
         break;
       case PairMode::kRetrieval: {
-        const std::vector<ImagePair> found = SelectRetrievalPairs(options, image_ids, database, &selection);
+        const std::vector<ImagePair> found =
+            SelectRetrievalPairs(options, image_ids, database, &selection);
         selection.num_retrieval_pairs = found.size();
         pairs.insert(pairs.end(), found.begin(), found.end());
         break;
       }
       case PairMode::kSpatial: {
         if (gps.empty() && options.mode == PairMode::kSpatial) {
-          throw InputError(database.Path().string() + ": --pairs spatial needs GPS positions, and no image has one "
+          throw InputError(database.Path().string() +
+                           ": --pairs spatial needs GPS positions, and no image has one "
                            "(EXIF GPSLatitude/GPSLongitude)");
         }
         const std::vector<ImagePair> found = SelectSpatialPairs(options.spatial, image_ids, gps);
@@ -357,10 +379,12 @@ PairSelection SelectPairs(const PairSelectionOptions& options, const std::vector
         pairs.insert(pairs.end(), found.begin(), found.end());
         break;
       }
-      case PairMode::kAuto: break;
+      case PairMode::kAuto:
+        break;
     }
   }
-  if (!pairs.empty()) selection.pairs = OrderPairsForLocality(UniquePairs(std::move(pairs)), image_ids);
+  if (!pairs.empty())
+    selection.pairs = OrderPairsForLocality(UniquePairs(std::move(pairs)), image_ids);
   selection.seconds = timer.ElapsedSeconds();
   return selection;
 }

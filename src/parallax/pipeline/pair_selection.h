@@ -1,12 +1,11 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "parallax/feature/vocabulary_tree.h"
 #include "parallax/scene/database.h"
@@ -82,10 +81,10 @@ struct PairSelection {
   bool uses_exhaustive = false;                    // The preemptive test applies.
   size_t num_retrieval_pairs = 0;
   size_t num_spatial_pairs = 0;
-  size_t num_loop_pairs = 0;                       // Added after verification (retrieval).
-  std::filesystem::path vocab_tree_path;           // The tree used (retrieval), read or saved.
+  size_t num_loop_pairs = 0;              // Added after verification (retrieval).
+  std::filesystem::path vocab_tree_path;  // The tree used (retrieval), read or saved.
   bool trained_vocab_tree = false;
-  double seconds = 0;                              // Choosing the pairs, training included.
+  double seconds = 0;  // Choosing the pairs, training included.
 };
 
 // Image pairs in processing order, smaller position in `image_ids` first. `image_ids` are
@@ -96,7 +95,8 @@ std::vector<std::pair<image_t, image_t>> SequentialPairs(const std::vector<image
                                                          int overlap);
 // Each image with its `num_neighbors` nearest within `max_distance` (positions in metres).
 std::vector<std::pair<image_t, image_t>> SpatialPairs(
-    const std::vector<std::pair<image_t, Eigen::Vector3d>>& positions, const SpatialPairOptions& options);
+    const std::vector<std::pair<image_t, Eigen::Vector3d>>& positions,
+    const SpatialPairOptions& options);
 // Each indexed image with the `num_neighbors` images it retrieves best (itself excluded).
 std::vector<std::pair<image_t, image_t>> RetrievalPairs(const RetrievalIndex& index,
                                                         const std::vector<image_t>& image_ids,
@@ -105,19 +105,19 @@ std::vector<std::pair<image_t, image_t>> RetrievalPairs(const RetrievalIndex& in
 // with the up to `num_neighbors` images it is not paired with that share the most verified
 // neighbours with it (at least two; ties: more inliers through them, then smaller id).
 std::vector<std::pair<image_t, image_t>> LoopClosingPairs(
-    const std::vector<std::pair<image_pair_t, int>>& verified, const std::vector<image_t>& image_ids,
-    int num_neighbors);
+    const std::vector<std::pair<image_pair_t, int>>& verified,
+    const std::vector<image_t>& image_ids, int num_neighbors);
 // Orders unordered pairs so that the images of consecutive pairs stay few (breadth-first over
 // the pair graph), which keeps the matcher's descriptor cache small; each pair smaller
 // order position first.
-std::vector<std::pair<image_t, image_t>> OrderPairsForLocality(std::vector<std::pair<image_t, image_t>> pairs,
-                                                               const std::vector<image_t>& image_ids);
+std::vector<std::pair<image_t, image_t>> OrderPairsForLocality(
+    std::vector<std::pair<image_t, image_t>> pairs, const std::vector<image_t>& image_ids);
 
 // Where the tree trained for a database is saved: beside it, `<stem>.vocab_tree`.
 std::filesystem::path DefaultVocabTreePath(const std::filesystem::path& database_path);
 
 // Chooses the pairs to match among `image_ids` (sorted by name) of `database`.
-PairSelection SelectPairs(const PairSelectionOptions& options, const std::vector<image_t>& image_ids,
-                          const Database& database);
+PairSelection SelectPairs(const PairSelectionOptions& options,
+                          const std::vector<image_t>& image_ids, const Database& database);
 
 }  // namespace parallax

@@ -35,7 +35,8 @@ TEST(PairSelection, SpatialPairsAreNearestWithinRadius) {
   // A 5 x 4 grid, 10 m apart, and one image 1 km away.
   std::vector<std::pair<image_t, Eigen::Vector3d>> positions;
   for (int y = 0; y < 4; ++y) {
-    for (int x = 0; x < 5; ++x) positions.emplace_back(1 + x + 5 * y, Eigen::Vector3d(10.0 * x, 10.0 * y, 0));
+    for (int x = 0; x < 5; ++x)
+      positions.emplace_back(1 + x + 5 * y, Eigen::Vector3d(10.0 * x, 10.0 * y, 0));
   }
   positions.emplace_back(99, Eigen::Vector3d(1000, 0, 0));
   SpatialPairOptions options;
@@ -61,8 +62,9 @@ TEST(PairSelection, SpatialPairsAreNearestWithinRadius) {
 TEST(PairSelection, LoopClosingPairsJoinImagesWithCommonNeighbours) {
   // A square 1-2-3-4 verified along its sides, a tail 4-5, and 6-7 alone.
   const std::vector<std::pair<image_pair_t, int>> verified = {
-      {ImagePairToPairId(1, 2), 100}, {ImagePairToPairId(2, 3), 100}, {ImagePairToPairId(3, 4), 100},
-      {ImagePairToPairId(4, 1), 100}, {ImagePairToPairId(4, 5), 100}, {ImagePairToPairId(6, 7), 100}};
+      {ImagePairToPairId(1, 2), 100}, {ImagePairToPairId(2, 3), 100},
+      {ImagePairToPairId(3, 4), 100}, {ImagePairToPairId(4, 1), 100},
+      {ImagePairToPairId(4, 5), 100}, {ImagePairToPairId(6, 7), 100}};
   const std::set<ImagePair> pairs = AsSet(LoopClosingPairs(verified, {1, 2, 3, 4, 5, 6, 7}, 5));
   // The diagonals have two common neighbours; 5 shares only 4 with 1 and 3: not enough.
   EXPECT_EQ(pairs, (std::set<ImagePair>{{1, 3}, {2, 4}}));
@@ -153,7 +155,8 @@ TEST_F(AerialPairSelectionTest, RetrievalFindsOverlappingViewsAndSavesItsTree) {
     with_partner.insert(a);
     with_partner.insert(b);
   }
-  EXPECT_GE(overlapping, 0.75 * selection.pairs.size()) << overlapping << " of " << selection.pairs.size();
+  EXPECT_GE(overlapping, 0.75 * selection.pairs.size())
+      << overlapping << " of " << selection.pairs.size();
   EXPECT_GE(with_partner.size(), 21u);  // Oblique views at the edge may find none.
 
   // A second selection reads the saved tree and gives the same pairs.
@@ -185,7 +188,8 @@ TEST_F(AerialPairSelectionTest, AutoChoosesBySizeAndAddsGpsNeighbours) {
   const PairSelection spatial = SelectPairs(options, ImageIds(database), database);
   int overlapping = 0;
   for (const auto& pair : AsSet(spatial.pairs)) overlapping += truth.count(pair) > 0 ? 1 : 0;
-  EXPECT_GE(overlapping, 0.9 * spatial.pairs.size()) << overlapping << " of " << spatial.pairs.size();
+  EXPECT_GE(overlapping, 0.9 * spatial.pairs.size())
+      << overlapping << " of " << spatial.pairs.size();
 }
 
 TEST_F(AerialPairSelectionTest, BadTreeFileNamesItself) {

@@ -15,7 +15,8 @@ namespace {
 class PointGrid {
  public:
   PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_size) : cell_size_(cell_size) {
-    for (size_t i = 0; i < points.size(); ++i) cells_[Key(Cell(points[i].x()), Cell(points[i].y()))].push_back(i);
+    for (size_t i = 0; i < points.size(); ++i)
+      cells_[Key(Cell(points[i].x()), Cell(points[i].y()))].push_back(i);
   }
   template <typename Visit>
   void ForEachIn(const Eigen::AlignedBox2d& box, Visit&& visit) const {
@@ -29,7 +30,9 @@ class PointGrid {
   }
 
  private:
-  int64_t Cell(double coordinate) const { return static_cast<int64_t>(std::floor(coordinate / cell_size_)); }
+  int64_t Cell(double coordinate) const {
+    return static_cast<int64_t>(std::floor(coordinate / cell_size_));
+  }
   static uint64_t Key(int64_t cx, int64_t cy) {
     return (static_cast<uint64_t>(cx) << 32) ^ static_cast<uint64_t>(cy & 0xFFFFFFFF);
   }
@@ -46,7 +49,8 @@ Eigen::AlignedBox2d ViewFootprint(const Camera& camera, const Rigid3d& cam_from_
   Eigen::AlignedBox2d box(center.head<2>(), center.head<2>());
   for (const double x : {0.0, static_cast<double>(camera.width)}) {
     for (const double y : {0.0, static_cast<double>(camera.height)}) {
-      const Eigen::Vector3d ray = (world_from_cam * camera.CamFromImg(Eigen::Vector2d(x, y)).homogeneous()).normalized();
+      const Eigen::Vector3d ray =
+          (world_from_cam * camera.CamFromImg(Eigen::Vector2d(x, y)).homogeneous()).normalized();
       for (const double z : {0.0, top}) {
         double t = max_distance;
         if (ray.z() * (z - center.z()) > 0.0) t = std::min(t, (z - center.z()) / ray.z());
@@ -67,7 +71,8 @@ void CovisibilityOptions::Check() const {
   PARALLAX_CHECK_GT(max_distance, 0.0);
 }
 
-std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene, const Reconstruction& views,
+std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene,
+                                                 const Reconstruction& views,
                                                  const CovisibilityOptions& options) {
   options.Check();
   const std::vector<image_t> image_ids = views.RegImageIds();
@@ -77,10 +82,12 @@ std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene, const 
   ground_region.setEmpty();
   for (size_t i = 0; i < image_ids.size(); ++i) {
     const Image& image = views.GetImage(image_ids[i]);
-    footprints[i] = ViewFootprint(views.GetCamera(image.camera_id), image.cam_from_world, top, options.max_distance);
+    footprints[i] = ViewFootprint(views.GetCamera(image.camera_id), image.cam_from_world, top,
+                                  options.max_distance);
     ground_region.extend(footprints[i]);
   }
-  const std::vector<SurfacePoint> samples = scene.SampleSurfacePoints(options.point_spacing, ground_region, options.seed);
+  const std::vector<SurfacePoint> samples =
+      scene.SampleSurfacePoints(options.point_spacing, ground_region, options.seed);
   std::vector<Eigen::Vector3d> points(samples.size());
   for (size_t i = 0; i < samples.size(); ++i) points[i] = samples[i].position;
   const PointGrid grid(points, 8.0);
@@ -102,7 +109,8 @@ std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene, const 
       const Eigen::Vector2d xy = camera.ImgFromCam(point_in_cam);
       if (xy.x() < 0.0 || xy.y() < 0.0 || xy.x() >= camera.width || xy.y() >= camera.height) return;
       // Stop a little short of the point: its own surface must not count as blocking it.
-      if (scene.Occluded(center, (point - center) / distance, distance * (1.0 - 1e-6) - 0.01)) return;
+      if (scene.Occluded(center, (point - center) / distance, distance * (1.0 - 1e-6) - 0.01))
+        return;
       seen[i].push_back(static_cast<uint32_t>(index));
     });
     std::sort(seen[i].begin(), seen[i].end());

@@ -34,9 +34,10 @@ struct CovisiblePair {
 // Which registered views of `views` see the same part of `scene`: points are sampled on its
 // surfaces (SceneModel::SampleSurfacePoints, the ground inside what the views see), a point
 // is seen by a view when it projects inside the image, lies in front of the camera, faces it
-// within max_incidence_degrees and nothing blocks the ray between them. Pairs sorted by ids. The ground truth that pair
-// selection (retrieval, GPS neighbours) is measured against.
-std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene, const Reconstruction& views,
+// within max_incidence_degrees and nothing blocks the ray between them. Pairs sorted by ids. The
+// ground truth that pair selection (retrieval, GPS neighbours) is measured against.
+std::vector<CovisiblePair> ComputeCovisiblePairs(const SceneModel& scene,
+                                                 const Reconstruction& views,
                                                  const CovisibilityOptions& options);
 
 }  // namespace parallax

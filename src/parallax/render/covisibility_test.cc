@@ -65,8 +65,8 @@ TEST(Covisibility, SurfacePointsLieOnTheScene) {
   scene_options.kind = SceneModelOptions::Kind::kTown;
   scene_options.town_half_size = 100;
   const SceneModel scene(scene_options);
-  const std::vector<SurfacePoint> samples =
-      scene.SampleSurfacePoints(2.0, Eigen::AlignedBox2d(Eigen::Vector2d(-20, -20), Eigen::Vector2d(20, 20)), 7);
+  const std::vector<SurfacePoint> samples = scene.SampleSurfacePoints(
+      2.0, Eigen::AlignedBox2d(Eigen::Vector2d(-20, -20), Eigen::Vector2d(20, 20)), 7);
   ASSERT_GT(samples.size(), 400u);  // The 40 x 40 m ground alone gives 400.
   // Every point is on the ground or in a building's box; a ray cast straight down onto a
   // ground point meets nothing below a building's top.
