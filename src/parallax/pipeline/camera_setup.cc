@@ -158,22 +158,30 @@ Camera CalibratedCameraForImage(const CameraSetupOptions& options, const Camera&
   return camera;
 }
 
-ImageCameraInfo ReadImageCameraInfo(const std::filesystem::path& path, size_t width, size_t height,
-                                    double sensor_width_mm) {
+ImageCameraInfo ImageCameraInfoFromExif(const ExifData& exif, size_t width, size_t height,
+                                        double sensor_width_mm) {
   ImageCameraInfo info;
-  std::optional<ExifData> exif;
-  try {
-    exif = ReadExif(path);
-  } catch (const InputError& error) {
-    PARALLAX_LOG(Debug) << error.what();
-  }
-  if (!exif) return info;
-  info.make = exif->make.value_or("");
-  info.model = exif->model.value_or("");
+  info.make = exif.make.value_or("");
+  info.model = exif.model.value_or("");
   info.focal_length_px = FocalLengthPixelsFromExif(
-      *exif, static_cast<int>(width), static_cast<int>(height),
+      exif, static_cast<int>(width), static_cast<int>(height),
       sensor_width_mm > 0 ? std::optional<double>(sensor_width_mm) : std::nullopt);
   return info;
+}
+
+std::optional<ExifData> ReadExifHint(const std::filesystem::path& path) {
+  try {
+    return ReadExif(path);
+  } catch (const InputError& error) {
+    PARALLAX_LOG(Debug) << error.what();
+    return std::nullopt;
+  }
+}
+
+ImageCameraInfo ReadImageCameraInfo(const std::filesystem::path& path, size_t width, size_t height,
+                                    double sensor_width_mm) {
+  const std::optional<ExifData> exif = ReadExifHint(path);
+  return exif ? ImageCameraInfoFromExif(*exif, width, height, sensor_width_mm) : ImageCameraInfo{};
 }
 
 CameraAssigner::CameraAssigner(const CameraSetupOptions& options, Database* database)
@@ -196,15 +204,16 @@ CameraAssigner::CameraAssigner(const CameraSetupOptions& options, Database* data
   if (!options_.intrinsics_path.empty()) K_ = ReadCalibrationMatrix(options_.intrinsics_path);
 }
 
+bool CameraAssigner::UsesExif() const {
+  const bool intrinsics_known = K_ || calibrated_camera_ || !options_.camera_params.empty();
+  return !intrinsics_known && options_.use_exif;
+}
+
 camera_t CameraAssigner::CameraForImage(const std::string& image_path, size_t width,
                                         size_t height) {
-  const bool intrinsics_known = K_ || calibrated_camera_ || !options_.camera_params.empty();
   ImageCameraInfo info;
-  if (!intrinsics_known && options_.use_exif && std::filesystem::is_regular_file(image_path)) {
+  if (UsesExif() && std::filesystem::is_regular_file(image_path)) {
     info = ReadImageCameraInfo(image_path, width, height, options_.sensor_width_mm);
-    if (info.focal_length_px) {
-      PARALLAX_LOG(Debug) << image_path << ": EXIF focal length " << *info.focal_length_px << " px";
-    }
   }
   return CameraForImage(image_path, width, height, info);
 }
@@ -212,6 +221,9 @@ camera_t CameraAssigner::CameraForImage(const std::string& image_path, size_t wi
 camera_t CameraAssigner::CameraForImage(const std::string& image_name, size_t width, size_t height,
                                         const ImageCameraInfo& info) {
   const bool intrinsics_known = K_ || calibrated_camera_ || !options_.camera_params.empty();
+  if (info.focal_length_px) {
+    PARALLAX_LOG(Debug) << image_name << ": EXIF focal length " << *info.focal_length_px << " px";
+  }
   const Camera wanted =
       calibrated_camera_
           ? CalibratedCameraForImage(options_, *calibrated_camera_, image_name, width, height)

@@ -8,6 +8,7 @@
 #include <tuple>
 #include <vector>
 
+#include "parallax/calibration/exif.h"
 #include "parallax/scene/camera.h"
 #include "parallax/scene/database.h"
 
@@ -73,8 +74,15 @@ struct ImageCameraInfo {
   std::optional<double> focal_length_px;  // From EXIF (FocalLengthPixelsFromExif).
 };
 
+// The camera information in an image's EXIF block.
+ImageCameraInfo ImageCameraInfoFromExif(const ExifData& exif, size_t width, size_t height,
+                                        double sensor_width_mm = 0);
+
 // Reads the EXIF of an image file (JPEG; other formats have none here). A file that cannot be
-// read or parsed gives an empty record: the image was decoded already, EXIF is only a hint.
+// read or parsed gives no block: the image was decoded already, EXIF is only a hint.
+std::optional<ExifData> ReadExifHint(const std::filesystem::path& path);
+
+// ImageCameraInfoFromExif of ReadExifHint (an empty record without EXIF).
 ImageCameraInfo ReadImageCameraInfo(const std::filesystem::path& path, size_t width, size_t height,
                                     double sensor_width_mm = 0);
 
@@ -92,9 +100,12 @@ class CameraAssigner {
   // `image_path` when single_camera is set and the size differs from the camera's, or when
   // the size differs from a camera.json's.
   camera_t CameraForImage(const std::string& image_path, size_t width, size_t height);
-  // As above with the EXIF information given (nothing is read).
+  // As above with the EXIF information given (nothing is read); callers pass an empty
+  // record unless UsesExif().
   camera_t CameraForImage(const std::string& image_name, size_t width, size_t height,
                           const ImageCameraInfo& info);
+  // Whether images' EXIF tells their cameras: intrinsics unknown and options.use_exif.
+  bool UsesExif() const;
 
  private:
   // Images with equal keys share a camera.

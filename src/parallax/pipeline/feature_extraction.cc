@@ -6,7 +6,6 @@
 #include <set>
 #include <opencv2/core.hpp>
 
-#include "parallax/calibration/exif.h"
 #include "parallax/util/check.h"
 #include "parallax/util/content_hash.h"
 #include "parallax/util/interrupt.h"
@@ -48,13 +47,13 @@ struct ExtractionResult {
   FeatureKeypoints keypoints;
   FeatureDescriptors descriptors;
   ImageFileFingerprint fingerprint;
-  std::optional<GeodeticPosition> gps;  // From EXIF, when the file has a position.
+  // Read once here, in parallel: the GPS position and, when EXIF tells cameras, the camera.
+  std::optional<ExifData> exif;
   double hash_seconds = 0;
 };
 
-// The EXIF GPS position of a photo, if any (an unreadable EXIF block is no position).
-std::optional<GeodeticPosition> ReadGpsPosition(const std::filesystem::path& path) {
-  const std::optional<ExifData> exif = ReadExif(path);
+// The EXIF GPS position of a photo, if any.
+std::optional<GeodeticPosition> GpsPosition(const std::optional<ExifData>& exif) {
   if (!exif || !exif->gps_latitude || !exif->gps_longitude) return std::nullopt;
   return GeodeticPosition{*exif->gps_latitude, *exif->gps_longitude, exif->gps_altitude.value_or(0.0)};
 }
@@ -106,7 +105,7 @@ ExtractionResult ExtractImage(const ExtractionJob& job, const FeatureExtractionO
     result.height = static_cast<size_t>(bitmap.Height());
     // An extractor per image: cheap to create, and no state is shared between threads.
     CreateSiftExtractor(options.sift)->Extract(bitmap.gray, &result.keypoints, &result.descriptors);
-    result.gps = ReadGpsPosition(job.path);
+    result.exif = ReadExifHint(job.path);
   } catch (const CheckError&) {
     throw;  // A bug, not a bad file.
   } catch (const std::exception& error) {
@@ -217,14 +216,19 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
     } else {
       camera_t camera_id = kInvalidCameraId;
       try {
-        camera_id = camera_assigner.CameraForImage(job.path.string(), result.width, result.height);
+        const ImageCameraInfo info =
+            camera_assigner.UsesExif() && result.exif
+                ? ImageCameraInfoFromExif(*result.exif, result.width, result.height,
+                                          options.camera.sensor_width_mm)
+                : ImageCameraInfo{};
+        camera_id = camera_assigner.CameraForImage(job.path.string(), result.width, result.height, info);
       } catch (const InputError& error) {
         PARALLAX_LOG(Warning) << "skipping " << error.what();
         stats.failed.emplace_back(job.name, error.what());
         return;
       }
       database->WriteImageWithFeatures(job.name, camera_id, result.keypoints, result.descriptors,
-                                       result.fingerprint, result.gps);
+                                       result.fingerprint, GpsPosition(result.exif));
     }
     if (job.image_id) database->WriteImageFileFingerprint(*job.image_id, result.fingerprint);
     stats.hash_thread_seconds += result.hash_seconds;
