@@ -40,6 +40,20 @@ bool IsVerified(const TwoViewGeometry& geometry) {
          geometry.config != TwoViewGeometry::kDegenerate && !geometry.inlier_matches.empty();
 }
 
+// The pairs without a two-view geometry in `database`; counts the others in `*num_stored`.
+std::vector<std::pair<image_t, image_t>> PairsNotStored(const std::vector<std::pair<image_t, image_t>>& pairs,
+                                                        const Database& database, size_t* num_stored) {
+  std::vector<std::pair<image_t, image_t>> remaining;
+  for (const auto& pair : pairs) {
+    if (database.ExistsTwoViewGeometry(pair.first, pair.second)) {
+      ++*num_stored;
+    } else {
+      remaining.push_back(pair);
+    }
+  }
+  return remaining;
+}
+
 // The rows of the `count` largest-scale keypoints (all when there are fewer).
 MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints, const MatchableDescriptors& descriptors,
                                      int count) {
@@ -110,14 +124,8 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
   stats.selection = selection;
   stats.preemptive = options.preemptive.enabled;
   stats.num_pairs = all_pairs.size();
-  std::vector<std::pair<image_t, image_t>> pairs;
-  for (const auto& pair : all_pairs) {
-    if (database->ExistsTwoViewGeometry(pair.first, pair.second)) {
-      ++stats.num_skipped;
-    } else {
-      pairs.push_back(pair);
-    }
-  }
+  const std::vector<std::pair<image_t, image_t>> pairs =
+      PairsNotStored(all_pairs, *database, &stats.num_skipped);
   std::string mode_names;
   for (const PairMode mode : selection.modes) mode_names += (mode_names.empty() ? "" : " + ") + PairModeName(mode);
   PARALLAX_LOG(Info) << "Matching: " << image_ids.size() << " images, " << all_pairs.size() << " "
@@ -158,30 +166,27 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
         }
       }
       std::vector<FeatureDescriptors> raw_descriptors(missing.size());
+      std::vector<FeatureKeypoints> keypoints(missing.size());
       for (size_t m = 0; m < missing.size(); ++m) {
         ImageFeatures& features = cache[missing[m]];
-        const FeatureKeypoints keypoints = database->ReadKeypoints(missing[m]);
-        features.points.reserve(keypoints.size());
-        for (const FeatureKeypoint& keypoint : keypoints) {
+        keypoints[m] = database->ReadKeypoints(missing[m]);
+        features.points.reserve(keypoints[m].size());
+        for (const FeatureKeypoint& keypoint : keypoints[m]) {
           features.points.emplace_back(keypoint.x, keypoint.y);
         }
         raw_descriptors[m] = database->ReadDescriptors(missing[m]);
-        if (static_cast<size_t>(raw_descriptors[m].rows()) != keypoints.size()) {
+        if (static_cast<size_t>(raw_descriptors[m].rows()) != keypoints[m].size()) {
           throw InputError(database->Path().string() + ": image " + std::to_string(missing[m]) +
-                           " has " + std::to_string(keypoints.size()) + " keypoints but " +
+                           " has " + std::to_string(keypoints[m].size()) + " keypoints but " +
                            std::to_string(raw_descriptors[m].rows()) + " descriptors");
         }
-      }
-      std::vector<FeatureKeypoints> missing_keypoints(missing.size());
-      if (stats.preemptive) {
-        for (size_t m = 0; m < missing.size(); ++m) missing_keypoints[m] = database->ReadKeypoints(missing[m]);
       }
       ParallelFor(0, missing.size(), options.num_threads, [&](size_t m) {
         ImageFeatures& features = cache.at(missing[m]);
         features.descriptors = PrepareDescriptors(raw_descriptors[m]);
         if (stats.preemptive) {
           features.largest =
-              LargestFeatures(missing_keypoints[m], features.descriptors, options.preemptive.num_features);
+              LargestFeatures(keypoints[m], features.descriptors, options.preemptive.num_features);
         }
       });
       raw_descriptors.clear();
@@ -261,7 +266,7 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
                          std::to_string(stats.num_pairs) + " pairs are matched and verified in " +
                          database->Path().string());
     }
-  progress.Finish();
+    progress.Finish();
   };
   match_pairs(pairs, "matching");
 
@@ -275,11 +280,11 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
     for (const auto& [pair_id, num_inliers] : database->ReadTwoViewGeometryNumInliers()) {
       if (num_inliers >= options.geometry.min_num_inliers) verified.emplace_back(pair_id, num_inliers);
     }
-    std::vector<std::pair<image_t, image_t>> loop_pairs;
-    for (const auto& pair : LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors)) {
-      // Pairs tried and rejected before are not candidates again.
-      if (!database->ExistsTwoViewGeometry(pair.first, pair.second)) loop_pairs.push_back(pair);
-    }
+    // Pairs tried and rejected before are not candidates again (nor counted as skipped).
+    size_t num_rejected_before = 0;
+    std::vector<std::pair<image_t, image_t>> loop_pairs = PairsNotStored(
+        LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors), *database,
+        &num_rejected_before);
     if (loop_pairs.empty()) break;
     stats.num_pairs += loop_pairs.size();
     stats.selection.num_loop_pairs += loop_pairs.size();
