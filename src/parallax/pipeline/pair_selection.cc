@@ -355,7 +355,6 @@ PairSelection SelectPairs(const PairSelectionOptions& options,
   for (const PairMode mode : selection.modes) {
     switch (mode) {
       case PairMode::kExhaustive:
-        selection.uses_exhaustive = true;
         selection.pairs = ExhaustivePairs(image_ids, options.block_size);
         break;
       case PairMode::kSequential:

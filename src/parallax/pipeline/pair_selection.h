@@ -78,7 +78,6 @@ struct PairSelection {
   std::vector<std::pair<image_t, image_t>> pairs;  // In processing order.
   std::vector<PairMode> modes;                     // The modes that gave them (auto resolved).
   std::string reason;                              // Why, in words, for the log.
-  bool uses_exhaustive = false;                    // The preemptive test applies.
   size_t num_retrieval_pairs = 0;
   size_t num_spatial_pairs = 0;
   size_t num_loop_pairs = 0;              // Added after verification (retrieval).
