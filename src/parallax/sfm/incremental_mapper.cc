@@ -11,6 +11,7 @@
 #include "parallax/util/check.h"
 #include "parallax/util/interrupt.h"
 #include "parallax/util/logging.h"
+#include "parallax/util/progress.h"
 #include "parallax/util/timer.h"
 
 namespace parallax {
@@ -62,9 +63,10 @@ Reconstruction ExtractRegisteredModel(const Reconstruction& reconstruction) {
 class IncrementalMapper::ModelBuilder {
  public:
   ModelBuilder(const IncrementalMapperOptions& options, const MapperInput& input,
-               const std::set<image_t>& used_images, MapperSummary* summary)
+               const std::set<image_t>& used_images, MapperSummary* summary,
+               ProgressReporter* progress)
       : options_(options), input_(input), used_images_(used_images), summary_(summary),
-        model_(input.correspondence_graph, &reconstruction_) {
+        progress_(progress), model_(input.correspondence_graph, &reconstruction_) {
     for (const auto& [camera_id, camera] : input.cameras) reconstruction_.AddCamera(camera);
     for (const auto& [image_id, image] : input.images) reconstruction_.AddImage(image);
   }
@@ -198,6 +200,7 @@ class IncrementalMapper::ModelBuilder {
                        << geometry.inlier_matches.size() << " inliers, median angle "
                        << median_angle_deg << " deg, " << reconstruction_.NumPoints3D()
                        << " points)";
+    progress_->Increment(2);
     return true;
   }
 
@@ -286,6 +289,7 @@ class IncrementalMapper::ModelBuilder {
       return false;
     }
     TriangulateImage(options_.triangulation, image_id, &model_);
+    progress_->Increment();
     report->reason.clear();
     report->error_before_ba_px = reconstruction_.MeanReprojectionErrorOfImage(image_id);
     PARALLAX_LOG(Debug) << "mapper: registered " << image.name << " (" << pose.num_inliers << "/"
@@ -478,6 +482,7 @@ class IncrementalMapper::ModelBuilder {
   const MapperInput& input_;
   const std::set<image_t>& used_images_;
   MapperSummary* summary_;
+  ProgressReporter* progress_;
   Reconstruction reconstruction_;
   TrackedReconstruction model_;
   image_t init_image_id1_ = kInvalidImageId;
@@ -500,8 +505,10 @@ std::vector<Reconstruction> IncrementalMapper::Reconstruct(MapperSummary* summar
 
   std::vector<Reconstruction> models;
   std::set<image_t> used_images;
+  // Registrations over all models; images that never register leave it short of the total.
+  ProgressReporter progress("mapping", input_.images.size());
   while (static_cast<int>(models.size()) < options_.max_num_models) {
-    ModelBuilder builder(options_, input_, used_images, summary);
+    ModelBuilder builder(options_, input_, used_images, summary, &progress);
     if (!builder.Initialize()) break;
     builder.Grow();
     Reconstruction& model = builder.Model();
@@ -514,6 +521,7 @@ std::vector<Reconstruction> IncrementalMapper::Reconstruct(MapperSummary* summar
     }
     if (!options_.multiple_models) break;
   }
+  progress.Finish();
   std::stable_sort(models.begin(), models.end(), [](const auto& a, const auto& b) {
     return a.NumRegImages() > b.NumRegImages();
   });
