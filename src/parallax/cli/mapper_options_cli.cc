@@ -32,18 +32,18 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_flag("!--no-refine-intrinsics", mapper.refine_focal_length,
                "Keep focal lengths fixed even for cameras without a prior");
   app.add_option("--ba-threads", mapper.bundle_adjustment.num_threads,
-                 "Threads for bundle adjustment (-1: all; 1 makes runs bit-identical also above "
-                 "250 images, where Ceres' threaded Schur elimination sums in arrival order)")
+                 "Threads for bundle adjustment (-1: all; any fixed count gives bit-identical "
+                 "runs, except with --ba-solver ceres above 150 images, where Ceres' threaded "
+                 "Schur elimination sums in arrival order)")
       ->capture_default_str();
   app.add_option_function<std::string>(
          "--ba-solver",
          [&mapper](const std::string& name) {
-           mapper.bundle_adjustment.solver = name == "ceres"         ? BundleAdjustmentSolver::kCeres
-                                             : name == "dense-schur" ? BundleAdjustmentSolver::kDenseSchur
-                                                                     : BundleAdjustmentSolver::kAuto;
+           mapper.bundle_adjustment.solver = BundleAdjustmentSolverFromName(name).value();
          },
-         "auto (Parallax's dense Schur LM up to 250 images, Ceres above), dense-schur or ceres")
-      ->check(CLI::IsMember({"auto", "dense-schur", "ceres"}))
+         "auto (Parallax's Schur LM: dense up to 250 images, block-sparse with conjugate "
+         "gradients above), dense-schur, sparse-schur, ceres or ceres-iterative")
+      ->check(CLI::IsMember({"auto", "dense-schur", "sparse-schur", "ceres", "ceres-iterative"}))
       ->default_str("auto");
   app.add_flag("!--no-text", options->write_text, "Do not write the .txt model files");
   app.add_flag("!--no-binary", options->write_binary, "Do not write the .bin model files");

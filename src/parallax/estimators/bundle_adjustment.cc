@@ -2,15 +2,26 @@
 
 #include "parallax/estimators/bundle_adjustment_problem.h"
 #include "parallax/estimators/ceres_bundle_adjuster.h"
-#include "parallax/estimators/dense_schur_bundle_adjuster.h"
 #include "parallax/estimators/robust_loss.h"
+#include "parallax/estimators/schur_bundle_adjuster.h"
 #include "parallax/util/check.h"
 #include "parallax/util/timer.h"
 
 namespace parallax {
 
+std::optional<BundleAdjustmentSolver> BundleAdjustmentSolverFromName(const std::string& name) {
+  if (name == "auto") return BundleAdjustmentSolver::kAuto;
+  if (name == "dense-schur") return BundleAdjustmentSolver::kDenseSchur;
+  if (name == "sparse-schur") return BundleAdjustmentSolver::kSparseSchur;
+  if (name == "ceres") return BundleAdjustmentSolver::kCeres;
+  if (name == "ceres-iterative") return BundleAdjustmentSolver::kCeresIterative;
+  return std::nullopt;
+}
+
 void BundleAdjustmentOptions::Check() const {
   PARALLAX_CHECK_GE(max_dense_schur_variables, 0);
+  PARALLAX_CHECK_GE(conjugate_gradient.max_num_iterations, 1);
+  PARALLAX_CHECK_GT(conjugate_gradient.relative_tolerance, 0.0);
   PARALLAX_CHECK_GT(loss_scale_px, 0.0);
   PARALLAX_CHECK_GE(max_num_iterations, 0);
   PARALLAX_CHECK_GE(function_tolerance, 0.0);
@@ -38,15 +49,28 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
 
   const std::unique_ptr<ceres::LossFunction> loss =
       CreateLossFunction(options.loss_function, options.loss_scale_px);
-  const bool dense_schur =
-      options.solver == BundleAdjustmentSolver::kDenseSchur ||
-      (options.solver == BundleAdjustmentSolver::kAuto &&
-       NumReducedCameraVariables(problem) <= static_cast<size_t>(options.max_dense_schur_variables));
-  summary = dense_schur ? SolveWithDenseSchur(options, loss.get(), &problem)
-                        : SolveWithCeres(options, loss.get(), &problem);
+  BundleAdjustmentSolver solver = options.solver;
+  if (solver == BundleAdjustmentSolver::kAuto) {
+    solver = NumReducedCameraVariables(problem) <= static_cast<size_t>(options.max_dense_schur_variables)
+                 ? BundleAdjustmentSolver::kDenseSchur
+                 : BundleAdjustmentSolver::kSparseSchur;
+  }
+  switch (solver) {
+    case BundleAdjustmentSolver::kDenseSchur:
+      summary = SolveWithDenseSchur(options, loss.get(), &problem);
+      break;
+    case BundleAdjustmentSolver::kSparseSchur:
+      summary = SolveWithSparseSchur(options, loss.get(), &problem);
+      break;
+    default:
+      summary = SolveWithCeres(options, loss.get(), &problem);
+  }
 
-  // Both solvers keep quaternions on the unit sphere only up to round-off.
+  // The solvers keep quaternions on the unit sphere only up to round-off.
+  // Constant poses are left to the bit: normalising one that is off the sphere by round-off
+  // would move the gauge.
   for (const image_t image_id : config.images) {
+    if (config.constant_poses.count(image_id) > 0) continue;
     reconstruction->GetImage(image_id).cam_from_world.rotation.normalize();
   }
   summary.seconds = timer.ElapsedSeconds();

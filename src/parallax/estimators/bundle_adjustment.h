@@ -1,9 +1,11 @@
 #pragma once
 
+#include <optional>
 #include <set>
 #include <string>
 #include <unordered_set>
 
+#include "parallax/estimators/reduced_camera_matrix.h"
 #include "parallax/scene/reconstruction.h"
 #include "parallax/util/types.h"
 
@@ -11,10 +13,15 @@ namespace parallax {
 
 enum class LossFunctionType { kTrivial, kHuber, kSoftLOne, kCauchy };
 
-// Which solver minimises: Parallax's dense Schur LM (dense_schur_bundle_adjuster.h), or Ceres
-// (dense or sparse Schur). Both take the same LM steps; kAuto picks ours while the reduced
-// camera system fits `max_dense_schur_variables`, Ceres' sparse Schur above.
-enum class BundleAdjustmentSolver { kAuto, kDenseSchur, kCeres };
+// Which solver minimises: Parallax's Schur LM with a dense or a block-sparse reduced camera
+// system (schur_bundle_adjuster.h), or Ceres (kCeres: dense or sparse Schur by size;
+// kCeresIterative: its conjugate gradients on the implicit Schur complement). All take LM
+// steps; kAuto picks the dense Schur LM while the reduced system fits
+// `max_dense_schur_variables`, the sparse one above.
+enum class BundleAdjustmentSolver { kAuto, kDenseSchur, kSparseSchur, kCeres, kCeresIterative };
+
+// "auto", "dense-schur", "sparse-schur", "ceres", "ceres-iterative"; nullopt for anything else.
+std::optional<BundleAdjustmentSolver> BundleAdjustmentSolverFromName(const std::string& name);
 
 struct BundleAdjustmentOptions {
   BundleAdjustmentSolver solver = BundleAdjustmentSolver::kAuto;
@@ -23,6 +30,8 @@ struct BundleAdjustmentOptions {
   // against Ceres' sparse Schur 87 s; at 250 images 76 s against 185 s, and 572 MB peak
   // against 882 MB. Larger problems are untried with it (its reduced matrix is n^2 doubles).
   int max_dense_schur_variables = 1500;
+  // The sparse Schur LM's linear solve.
+  ConjugateGradientOptions conjugate_gradient;
   LossFunctionType loss_function = LossFunctionType::kCauchy;
   double loss_scale_px = 1.0;         // Robust loss scale on reprojection error, pixels.
   bool refine_focal_length = false;
@@ -61,6 +70,7 @@ struct BundleAdjustmentSummary {
   double seconds = 0;
   std::string termination;       // Termination type and message (Ceres' wording).
   std::string solver;            // Which solver ran, e.g. "dense Schur LM" or "Ceres SPARSE_SCHUR".
+  int num_linear_iterations = 0; // Conjugate-gradient iterations of the sparse Schur LM.
 };
 
 // Minimises reprojection error over poses, points and (optionally) intrinsics:

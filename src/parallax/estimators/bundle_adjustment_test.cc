@@ -383,13 +383,18 @@ TEST_P(BundleAdjustmentSolvers, EmptyOrUnobservedConfigFailsGracefully) {
 
 INSTANTIATE_TEST_SUITE_P(, BundleAdjustmentSolvers,
                          ::testing::Values(BundleAdjustmentSolver::kDenseSchur,
+                                           BundleAdjustmentSolver::kSparseSchur,
                                            BundleAdjustmentSolver::kCeres),
                          [](const auto& info) {
-                           return info.param == BundleAdjustmentSolver::kCeres ? "Ceres"
-                                                                               : "DenseSchur";
+                           switch (info.param) {
+                             case BundleAdjustmentSolver::kCeres: return "Ceres";
+                             case BundleAdjustmentSolver::kSparseSchur: return "SparseSchur";
+                             default: return "DenseSchur";
+                           }
                          });
 
-// Same problem, robust loss, intrinsics refined: the two solvers land on one minimum.
+// Same problem, robust loss, intrinsics refined: the solvers land on one minimum (the
+// sparse Schur LM's conjugate gradients stop at a relative residual, hence its looser bar).
 TEST(BundleAdjustment, SolversReachTheSameMinimum) {
   SetPRNGSeed(11);
   SceneOptions scene;
@@ -404,7 +409,8 @@ TEST(BundleAdjustment, SolversReachTheSameMinimum) {
   perturbed.GetCamera(1).params[0] *= 1.02;
   std::vector<Reconstruction> results;
   std::vector<BundleAdjustmentSummary> summaries;
-  for (const auto solver : {BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kCeres}) {
+  for (const auto solver : {BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kCeres,
+                            BundleAdjustmentSolver::kSparseSchur}) {
     BundleAdjustmentOptions options = TightOptions(solver);
     options.loss_function = LossFunctionType::kCauchy;
     options.refine_focal_length = true;
@@ -423,9 +429,18 @@ TEST(BundleAdjustment, SolversReachTheSameMinimum) {
   EXPECT_LT(difference.max_point, 1e-6);
   EXPECT_NEAR(results[0].GetCamera(1).params[0], results[1].GetCamera(1).params[0], 1e-6);
   EXPECT_NEAR(results[0].GetCamera(1).params[3], results[1].GetCamera(1).params[3], 1e-9);
+
+  EXPECT_EQ(summaries[2].solver, "sparse Schur LM (conjugate gradients)");
+  EXPECT_GT(summaries[2].num_linear_iterations, 0);
+  EXPECT_NEAR(summaries[2].initial_cost, summaries[0].initial_cost, 1e-9 * summaries[0].initial_cost);
+  EXPECT_NEAR(summaries[2].final_cost, summaries[0].final_cost, 1e-6 * summaries[0].final_cost);
+  const SceneErrors sparse_difference = CompareToTruth(results[0], results[2]);
+  EXPECT_LT(sparse_difference.max_center, 1e-5);
+  EXPECT_LT(sparse_difference.max_point, 1e-5);
+  EXPECT_NEAR(results[2].GetCamera(1).params[0], results[0].GetCamera(1).params[0], 1e-4);
 }
 
-// kAuto: the dense Schur LM while the reduced system fits, Ceres above.
+// kAuto: the dense Schur LM while the reduced system fits, the sparse one above.
 TEST(BundleAdjustment, AutoPicksSolverBySize) {
   SceneOptions scene;
   scene.num_images = 20;
@@ -436,7 +451,21 @@ TEST(BundleAdjustment, AutoPicksSolverBySize) {
   BundleAdjustmentOptions options;
   EXPECT_EQ(BundleAdjust(options, config, &reconstruction).solver, "dense Schur LM");
   options.max_dense_schur_variables = 6 * 18;  // 19 variable poses need 114.
-  EXPECT_EQ(BundleAdjust(options, config, &reconstruction).solver.rfind("Ceres ", 0), 0u);
+  EXPECT_EQ(BundleAdjust(options, config, &reconstruction).solver,
+            "sparse Schur LM (conjugate gradients)");
+}
+
+TEST(BundleAdjustment, SolverNames) {
+  for (const auto solver :
+       {BundleAdjustmentSolver::kAuto, BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kSparseSchur,
+        BundleAdjustmentSolver::kCeres, BundleAdjustmentSolver::kCeresIterative}) {
+    bool found = false;
+    for (const char* name : {"auto", "dense-schur", "sparse-schur", "ceres", "ceres-iterative"}) {
+      found |= BundleAdjustmentSolverFromName(name) == solver;
+    }
+    EXPECT_TRUE(found);
+  }
+  EXPECT_FALSE(BundleAdjustmentSolverFromName("sparse").has_value());
 }
 
 TEST(BundleAdjustment, OptionsCheck) {

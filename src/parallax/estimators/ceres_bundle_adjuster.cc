@@ -22,18 +22,24 @@ namespace {
 constexpr size_t kMaxNumImagesForDenseSchur = 150;
 
 // Dense Schur for few images; sparse Schur with the best sparse Cholesky Ceres was built with
-// (Debian's 2.1 has SuiteSparse, CXSparse and Eigen), iterative Schur when it has none.
-void ChooseLinearSolver(size_t num_images, ceres::Solver::Options* solver_options) {
-  if (num_images < kMaxNumImagesForDenseSchur) {
+// (Debian's 2.1 has SuiteSparse, CXSparse and Eigen); conjugate gradients on the implicit
+// Schur complement with the Schur-Jacobi preconditioner when asked, or when Ceres has no
+// sparse Cholesky.
+void ChooseLinearSolver(const BundleAdjustmentOptions& options, size_t num_images,
+                        ceres::Solver::Options* solver_options) {
+  const bool iterative = options.solver == BundleAdjustmentSolver::kCeresIterative;
+  if (!iterative && num_images < kMaxNumImagesForDenseSchur) {
     solver_options->linear_solver_type = ceres::DENSE_SCHUR;
     return;
   }
-  for (const ceres::SparseLinearAlgebraLibraryType library :
-       {ceres::SUITE_SPARSE, ceres::EIGEN_SPARSE, ceres::CX_SPARSE}) {
-    if (ceres::IsSparseLinearAlgebraLibraryTypeAvailable(library)) {
-      solver_options->linear_solver_type = ceres::SPARSE_SCHUR;
-      solver_options->sparse_linear_algebra_library_type = library;
-      return;
+  if (!iterative) {
+    for (const ceres::SparseLinearAlgebraLibraryType library :
+         {ceres::SUITE_SPARSE, ceres::EIGEN_SPARSE, ceres::CX_SPARSE}) {
+      if (ceres::IsSparseLinearAlgebraLibraryTypeAvailable(library)) {
+        solver_options->linear_solver_type = ceres::SPARSE_SCHUR;
+        solver_options->sparse_linear_algebra_library_type = library;
+        return;
+      }
     }
   }
   solver_options->linear_solver_type = ceres::ITERATIVE_SCHUR;
@@ -179,7 +185,7 @@ BundleAdjustmentSummary SolveWithCeres(const BundleAdjustmentOptions& options,
   ceres::Solver::Options solver_options;
   solver_options.minimizer_type = ceres::TRUST_REGION;
   solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  ChooseLinearSolver(problem->num_config_images, &solver_options);
+  ChooseLinearSolver(options, problem->num_config_images, &solver_options);
   solver_options.linear_solver_ordering = ordering;
   solver_options.max_num_iterations = options.max_num_iterations;
   solver_options.function_tolerance = options.function_tolerance;

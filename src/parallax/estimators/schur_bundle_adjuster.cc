@@ -1,4 +1,4 @@
-#include "parallax/estimators/dense_schur_bundle_adjuster.h"
+#include "parallax/estimators/schur_bundle_adjuster.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 #include <vector>
 
 #include "parallax/estimators/cost_functions/reprojection_error.h"
+#include "parallax/estimators/reduced_camera_matrix.h"
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
 #include "parallax/util/threading.h"
@@ -68,9 +70,12 @@ struct ObservationJacobian {
   Matrix23 point;
 };
 
-class DenseSchurSolver {
+template <typename ReducedMatrix>
+class SchurSolver {
  public:
-  DenseSchurSolver(const BundleAdjustmentOptions& options, const ceres::LossFunction* loss,
+  static constexpr bool kSparse = std::is_same_v<ReducedMatrix, BlockSparseReducedMatrix>;
+
+  SchurSolver(const BundleAdjustmentOptions& options, const ceres::LossFunction* loss,
                    BundleAdjustmentProblem* problem)
       : options_(options), loss_(loss), problem_(*problem) {
     Layout();
@@ -121,17 +126,20 @@ class DenseSchurSolver {
   Parameters parameters_;
   std::vector<ObservationJacobian> jacobians_;  // In observation_order_.
   std::vector<Matrix2C> camera_jacobians_;      // Only when some camera is free.
-  Eigen::MatrixXd u_;                           // Lower triangle.
+  ReducedMatrixStructure structure_;
+  ReducedMatrix u_;                             // Lower triangle.
   Eigen::VectorXd g_camera_;
   std::vector<Eigen::Matrix3d> v_;
   std::vector<Eigen::Vector3d> g_point_;
   std::vector<Eigen::Matrix3d> v_inverse_;  // Damped, from the last ComputeStep.
   // Per-chunk accumulators: U and g_c while linearising, then S and b while solving.
-  std::vector<Eigen::MatrixXd> partial_matrix_;
+  std::vector<ReducedMatrix> partial_matrix_;
+  int num_linear_iterations_ = 0;  // Conjugate-gradient iterations, over all steps.
   std::vector<Eigen::VectorXd> partial_vector_;
 };
 
-void DenseSchurSolver::Layout() {
+template <typename ReducedMatrix>
+void SchurSolver<ReducedMatrix>::Layout() {
   num_threads_ = std::min(EffectiveNumThreads(options_.num_threads), EffectiveNumThreads(-1));
   const size_t num_poses = problem_.poses.size();
   pose_offset_.assign(num_poses, -1);
@@ -193,11 +201,33 @@ void DenseSchurSolver::Layout() {
   v_.resize(num_points);
   g_point_.resize(num_points);
   v_inverse_.resize(num_points);
-  partial_matrix_.assign(NumChunks(), Eigen::MatrixXd());
+  for (size_t i = 0; i < num_poses; ++i) {
+    if (pose_offset_[i] >= 0) structure_.AddVariableBlock(pose_offset_[i], 6);
+  }
+  for (size_t c = 0; c < num_cameras; ++c) {
+    if (camera_offset_[c] >= 0) structure_.AddVariableBlock(camera_offset_[c], camera_dim_[c]);
+  }
+  if constexpr (kSparse) {
+    // The blocks a point couples: its views' poses and intrinsics, pairwise.
+    std::vector<int> offsets;
+    for (size_t j = 0; j < num_points; ++j) {
+      offsets.clear();
+      for (size_t k = point_begin_[j]; k < point_begin_[j + 1]; ++k) {
+        const auto& observation = problem_.observations[observation_order_[k]];
+        if (pose_offset_[observation.pose] >= 0) offsets.push_back(pose_offset_[observation.pose]);
+        if (camera_offset_[observation.camera] >= 0) offsets.push_back(camera_offset_[observation.camera]);
+      }
+      structure_.Couple(offsets);
+    }
+  }
+  structure_.Finalize();
+  u_ = ReducedMatrix(structure_);
+  partial_matrix_.assign(NumChunks(), ReducedMatrix(structure_));
   partial_vector_.assign(NumChunks(), Eigen::VectorXd());
 }
 
-void DenseSchurSolver::CopyIn() {
+template <typename ReducedMatrix>
+void SchurSolver<ReducedMatrix>::CopyIn() {
   for (const auto& pose : problem_.poses) {
     parameters_.rotations.push_back(pose.cam_from_world->rotation.normalized());
     parameters_.translations.push_back(pose.cam_from_world->translation);
@@ -206,7 +236,8 @@ void DenseSchurSolver::CopyIn() {
   for (const auto& block : problem_.cameras) parameters_.camera_params.push_back(block.camera->params);
 }
 
-void DenseSchurSolver::CopyOut() const {
+template <typename ReducedMatrix>
+void SchurSolver<ReducedMatrix>::CopyOut() const {
   for (size_t i = 0; i < problem_.poses.size(); ++i) {
     if (pose_offset_[i] < 0) continue;
     problem_.poses[i].cam_from_world->rotation = parameters_.rotations[i];
@@ -220,7 +251,8 @@ void DenseSchurSolver::CopyOut() const {
   }
 }
 
-double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) {
+template <typename ReducedMatrix>
+double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool linearize) {
   std::vector<Eigen::Matrix3d> rotations(parameters.rotations.size());
   for (size_t i = 0; i < rotations.size(); ++i) {
     rotations[i] = parameters.rotations[i].toRotationMatrix();
@@ -228,12 +260,12 @@ double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) 
   const int n = num_camera_variables_;
   std::vector<double> chunk_cost(NumChunks(), 0.0);
   ParallelFor(0, static_cast<size_t>(NumChunks()), num_threads_, [&](size_t chunk) {
-    Eigen::MatrixXd* u = nullptr;
+    ReducedMatrix* u = nullptr;
     Eigen::VectorXd* g = nullptr;
     if (linearize) {
       u = &partial_matrix_[chunk];
       g = &partial_vector_[chunk];
-      u->setZero(n, n);
+      u->SetZero();
       g->setZero(n);
     }
     double cost = 0;
@@ -295,21 +327,21 @@ double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) 
         }
         const int pose_offset = pose_offset_[p];
         if (pose_offset >= 0) {
-          u->block<6, 6>(pose_offset, pose_offset).noalias() += jacobian.pose.transpose() * jacobian.pose;
+          u->template Block<6, 6>(pose_offset, pose_offset).noalias() += jacobian.pose.transpose() * jacobian.pose;
           g->segment<6>(pose_offset).noalias() += jacobian.pose.transpose() * jacobian.residual;
         }
         if (camera_offset >= 0) {
           const auto camera_block = camera_jacobian->leftCols(dim);
-          u->block(camera_offset, camera_offset, dim, dim).noalias() +=
+          u->Block(camera_offset, camera_offset, dim, dim).noalias() +=
               camera_block.transpose() * camera_block;
           g->segment(camera_offset, dim).noalias() += camera_block.transpose() * jacobian.residual;
           if (pose_offset >= 0) {
             // Lower triangle: the later block's rows.
             if (camera_offset > pose_offset) {
-              u->block(camera_offset, pose_offset, dim, 6).noalias() +=
+              u->Block(camera_offset, pose_offset, dim, 6).noalias() +=
                   camera_block.transpose() * jacobian.pose;
             } else {
-              u->block(pose_offset, camera_offset, 6, dim).noalias() +=
+              u->Block(pose_offset, camera_offset, 6, dim).noalias() +=
                   jacobian.pose.transpose() * camera_block;
             }
           }
@@ -337,7 +369,8 @@ double DenseSchurSolver::Evaluate(const Parameters& parameters, bool linearize) 
   return cost;
 }
 
-bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
+template <typename ReducedMatrix>
+bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* camera_step,
                                    std::vector<Eigen::Vector3d>* point_step) {
   const int n = num_camera_variables_;
   const auto damping = [radius](double diagonal) {
@@ -346,9 +379,9 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
   // Per chunk: S_chunk = -sum_j W_j V_j^-1 W_j^T and b_chunk = sum_j W_j V_j^-1 g_j over its
   // points, lower triangle only; W_j's rows are the pose and camera blocks of j's views.
   ParallelFor(0, static_cast<size_t>(NumChunks()), num_threads_, [&](size_t chunk) {
-    Eigen::MatrixXd& s = partial_matrix_[chunk];
+    ReducedMatrix& s = partial_matrix_[chunk];
     Eigen::VectorXd& b = partial_vector_[chunk];
-    s.setZero(n, n);
+    s.SetZero();
     b.setZero(n);
     std::vector<Matrix63> w_pose, y_pose;
     std::vector<MatrixC3> w_camera, y_camera;
@@ -399,18 +432,18 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
           const int dim_b = camera_dim_[obs_b.camera];
           if (pose_a >= 0 && pose_b >= 0) {
             if (pose_a > pose_b) {
-              s.block<6, 6>(pose_a, pose_b).noalias() -= y_pose[a] * w_pose[bi].transpose();
+              s.template Block<6, 6>(pose_a, pose_b).noalias() -= y_pose[a] * w_pose[bi].transpose();
             } else if (pose_a < pose_b) {
-              s.block<6, 6>(pose_b, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
+              s.template Block<6, 6>(pose_b, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
             } else {
               // The diagonal block; (a, b) and (b, a) both land here only if one image
               // observed the point twice.
-              s.block<6, 6>(pose_a, pose_a).noalias() -= y_pose[a] * w_pose[bi].transpose();
-              if (bi != a) s.block<6, 6>(pose_a, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
+              s.template Block<6, 6>(pose_a, pose_a).noalias() -= y_pose[a] * w_pose[bi].transpose();
+              if (bi != a) s.template Block<6, 6>(pose_a, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
             }
           }
           if (camera_a >= 0 && camera_b >= 0) {
-            auto block = s.block(std::max(camera_a, camera_b), std::min(camera_a, camera_b),
+            auto block = s.Block(std::max(camera_a, camera_b), std::min(camera_a, camera_b),
                                  camera_a >= camera_b ? dim_a : dim_b,
                                  camera_a >= camera_b ? dim_b : dim_a);
             if (camera_a > camera_b) {
@@ -428,10 +461,10 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
                                  int dim, const MatrixC3& w_or_y_camera) {
             if (pose_offset < 0 || camera_offset < 0) return;
             if (camera_offset > pose_offset) {
-              s.block(camera_offset, pose_offset, dim, 6).noalias() -=
+              s.Block(camera_offset, pose_offset, dim, 6).noalias() -=
                   w_or_y_camera * y_or_w_pose.transpose();
             } else {
-              s.block(pose_offset, camera_offset, 6, dim).noalias() -=
+              s.Block(pose_offset, camera_offset, 6, dim).noalias() -=
                   y_or_w_pose * w_or_y_camera.transpose();
             }
           };
@@ -444,19 +477,19 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
     }
   });
 
-  Eigen::MatrixXd s = u_;
+  ReducedMatrix s = u_;
   Eigen::VectorXd b = -g_camera_;
   for (int chunk = 0; chunk < NumChunks(); ++chunk) {
     s += partial_matrix_[chunk];
     b += partial_vector_[chunk];
   }
-  for (int d = 0; d < n; ++d) s(d, d) += damping(u_(d, d));
+  for (int d = 0; d < n; ++d) s.AddToDiagonal(d, damping(u_.Diagonal(d)));
   camera_step->setZero(n);
   if (n > 0) {
-    const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(s);
-    if (llt.info() != Eigen::Success) return false;
-    *camera_step = llt.solve(b);
-    if (!camera_step->allFinite()) return false;
+    int num_iterations = 0;
+    const bool solved = s.Solve(b, options_.conjugate_gradient, camera_step, &num_iterations);
+    num_linear_iterations_ += num_iterations;
+    if (!solved || !camera_step->allFinite()) return false;
   }
 
   // Back-substitution: dX_j = -V_j^-1 (g_j + W_j^T dc).
@@ -474,7 +507,8 @@ bool DenseSchurSolver::ComputeStep(double radius, Eigen::VectorXd* camera_step,
   return true;
 }
 
-Eigen::Vector2d DenseSchurSolver::CameraStepImage(size_t k,
+template <typename ReducedMatrix>
+Eigen::Vector2d SchurSolver<ReducedMatrix>::CameraStepImage(size_t k,
                                                   const Eigen::VectorXd& camera_step) const {
   const auto& observation = problem_.observations[observation_order_[k]];
   Eigen::Vector2d image = Eigen::Vector2d::Zero();
@@ -489,7 +523,8 @@ Eigen::Vector2d DenseSchurSolver::CameraStepImage(size_t k,
 }
 
 // Ceres' model cost change of the linearised, loss-corrected residuals: -(J d)^T (r + J d / 2).
-double DenseSchurSolver::ModelCostChange(const Eigen::VectorXd& camera_step,
+template <typename ReducedMatrix>
+double SchurSolver<ReducedMatrix>::ModelCostChange(const Eigen::VectorXd& camera_step,
                                          const std::vector<Eigen::Vector3d>& point_step) const {
   double change = 0;
   for (size_t k = 0; k < observation_order_.size(); ++k) {
@@ -502,7 +537,8 @@ double DenseSchurSolver::ModelCostChange(const Eigen::VectorXd& camera_step,
   return change;
 }
 
-void DenseSchurSolver::ApplyStep(const Eigen::VectorXd& camera_step,
+template <typename ReducedMatrix>
+void SchurSolver<ReducedMatrix>::ApplyStep(const Eigen::VectorXd& camera_step,
                                  const std::vector<Eigen::Vector3d>& point_step,
                                  Parameters* candidate) const {
   *candidate = parameters_;
@@ -530,7 +566,8 @@ void DenseSchurSolver::ApplyStep(const Eigen::VectorXd& camera_step,
 }
 
 // |x| over the variable blocks, as Ceres' parameter tolerance uses it.
-double DenseSchurSolver::ParameterNorm(const Parameters& parameters) const {
+template <typename ReducedMatrix>
+double SchurSolver<ReducedMatrix>::ParameterNorm(const Parameters& parameters) const {
   double squared = 0;
   for (size_t i = 0; i < problem_.poses.size(); ++i) {
     if (pose_offset_[i] < 0) continue;
@@ -547,9 +584,10 @@ double DenseSchurSolver::ParameterNorm(const Parameters& parameters) const {
   return std::sqrt(squared);
 }
 
-BundleAdjustmentSummary DenseSchurSolver::Solve() {
+template <typename ReducedMatrix>
+BundleAdjustmentSummary SchurSolver<ReducedMatrix>::Solve() {
   BundleAdjustmentSummary summary;
-  summary.solver = "dense Schur LM";
+  summary.solver = kSparse ? "sparse Schur LM (conjugate gradients)" : "dense Schur LM";
   summary.num_residuals = problem_.observations.size();
   double cost = Evaluate(parameters_, /*linearize=*/true);
   summary.initial_cost = cost;
@@ -625,7 +663,7 @@ BundleAdjustmentSummary DenseSchurSolver::Solve() {
       if (radius < kMinRadius) termination << "CONVERGENCE: minimum trust region radius reached";
     }
     if (options_.print_summary) {
-      PARALLAX_LOG(Debug) << "dense Schur LM: step " << num_steps << " cost " << cost
+      PARALLAX_LOG(Debug) << summary.solver << ": step " << num_steps << " cost " << cost
                           << " radius " << radius;
     }
   }
@@ -633,6 +671,7 @@ BundleAdjustmentSummary DenseSchurSolver::Solve() {
   summary.final_cost = cost;
   summary.num_iterations = num_steps;
   summary.termination = termination.str();
+  summary.num_linear_iterations = num_linear_iterations_;
   return summary;
 }
 
@@ -653,7 +692,15 @@ BundleAdjustmentSummary SolveWithDenseSchur(const BundleAdjustmentOptions& optio
                                             const ceres::LossFunction* loss,
                                             BundleAdjustmentProblem* problem) {
   PARALLAX_CHECK(problem != nullptr);
-  DenseSchurSolver solver(options, loss, problem);
+  SchurSolver<DenseReducedMatrix> solver(options, loss, problem);
+  return solver.Solve();
+}
+
+BundleAdjustmentSummary SolveWithSparseSchur(const BundleAdjustmentOptions& options,
+                                             const ceres::LossFunction* loss,
+                                             BundleAdjustmentProblem* problem) {
+  PARALLAX_CHECK(problem != nullptr);
+  SchurSolver<BlockSparseReducedMatrix> solver(options, loss, problem);
   return solver.Solve();
 }
 

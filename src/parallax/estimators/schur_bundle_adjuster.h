@@ -11,7 +11,9 @@ namespace parallax {
 
 // Levenberg-Marquardt on the reduced camera system, written for bundle adjustment: points
 // are eliminated point by point (Schur complement), the poses and intrinsics are solved
-// with a dense Cholesky, and the points are recovered by back-substitution. The steps are
+// (SolveWithDenseSchur: all of S and a dense Cholesky; SolveWithSparseSchur: only the blocks
+// of images that share points, and block-Jacobi preconditioned conjugate gradients), and
+// the points are recovered by back-substitution. The steps are
 // Ceres' (same damping, radius updates and termination tests), but the reduced system is
 // built straight from 2x6 and 2x3 Jacobian blocks, without Ceres' generic per-residual
 // machinery, which took most of the time on problems of a few hundred images or less.
@@ -21,6 +23,13 @@ namespace parallax {
 BundleAdjustmentSummary SolveWithDenseSchur(const BundleAdjustmentOptions& options,
                                             const ceres::LossFunction* loss,
                                             BundleAdjustmentProblem* problem);
+
+// The same steps for problems whose dense S would not fit or factor in time: memory and cost
+// per iteration grow with the observations and the pairs of co-visible images, not with
+// the square or cube of the number of images.
+BundleAdjustmentSummary SolveWithSparseSchur(const BundleAdjustmentOptions& options,
+                                             const ceres::LossFunction* loss,
+                                             BundleAdjustmentProblem* problem);
 
 // Size of the reduced camera system: 6 per variable pose, plus the free intrinsics.
 size_t NumReducedCameraVariables(const BundleAdjustmentProblem& problem);
