@@ -418,6 +418,23 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
           b.segment(camera_offset_[c], camera_dim_[c]).noalias() += y_camera[a] * g_point_[j];
         }
       }
+      // One variable camera in every view of the point (a collection from one camera): its
+      // block of the sum is W_c V^-1 W_c^T with W_c the sum of the views' camera parts, and
+      // pose a's cross block Y_a W_c^T: m products where pairs of views take m^2.
+      int shared_camera = problem_.observations[observation_order_[begin]].camera;
+      if (camera_offset_[shared_camera] < 0) shared_camera = -1;
+      for (size_t a = 1; a < m && shared_camera >= 0; ++a) {
+        if (problem_.observations[observation_order_[begin + a]].camera != shared_camera) shared_camera = -1;
+      }
+      const auto cross = [&](int pose_offset, const Matrix63& y_or_w_pose, int camera_offset, int dim,
+                             const MatrixC3& w_or_y_camera) {
+        if (pose_offset < 0 || camera_offset < 0) return;
+        if (camera_offset > pose_offset) {
+          s.Block(camera_offset, pose_offset, dim, 6).noalias() -= w_or_y_camera * y_or_w_pose.transpose();
+        } else {
+          s.Block(pose_offset, camera_offset, 6, dim).noalias() -= y_or_w_pose * w_or_y_camera.transpose();
+        }
+      };
       // Block (a, b) of the sum is Y_a W_b^T; only blocks on or below the diagonal are
       // written, each once: pairs b <= a, and for b == a the two segments in one order.
       for (size_t a = 0; a < m; ++a) {
@@ -442,7 +459,7 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
               if (bi != a) s.template Block<6, 6>(pose_a, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
             }
           }
-          if (camera_a >= 0 && camera_b >= 0) {
+          if (camera_a >= 0 && camera_b >= 0 && shared_camera < 0) {
             auto block = s.Block(std::max(camera_a, camera_b), std::min(camera_a, camera_b),
                                  camera_a >= camera_b ? dim_a : dim_b,
                                  camera_a >= camera_b ? dim_b : dim_a);
@@ -456,22 +473,24 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
               if (bi != a) block.noalias() -= w_camera[bi] * y_camera[a].transpose();
             }
           }
+          if (shared_camera >= 0) continue;  // Its blocks follow the loop.
           // Cross blocks pose(a)-camera(b), and pose(b)-camera(a) when b != a.
-          const auto cross = [&](int pose_offset, const Matrix63& y_or_w_pose, int camera_offset,
-                                 int dim, const MatrixC3& w_or_y_camera) {
-            if (pose_offset < 0 || camera_offset < 0) return;
-            if (camera_offset > pose_offset) {
-              s.Block(camera_offset, pose_offset, dim, 6).noalias() -=
-                  w_or_y_camera * y_or_w_pose.transpose();
-            } else {
-              s.Block(pose_offset, camera_offset, 6, dim).noalias() -=
-                  y_or_w_pose * w_or_y_camera.transpose();
-            }
-          };
           if (pose_a >= 0 && camera_b >= 0) cross(pose_a, y_pose[a], camera_b, dim_b, w_camera[bi]);
           if (bi != a && pose_b >= 0 && camera_a >= 0) {
             cross(pose_b, w_pose[bi], camera_a, dim_a, y_camera[a]);
           }
+        }
+      }
+      if (shared_camera >= 0) {
+        const int offset = camera_offset_[shared_camera];
+        const int dim = camera_dim_[shared_camera];
+        MatrixC3 w_sum = w_camera[0];
+        for (size_t a = 1; a < m; ++a) w_sum += w_camera[a];
+        const MatrixC3 y_sum = w_sum * v_inverse_[j];
+        s.Block(offset, offset, dim, dim).noalias() -= y_sum * w_sum.transpose();
+        for (size_t a = 0; a < m; ++a) {
+          cross(pose_offset_[problem_.observations[observation_order_[begin + a]].pose], y_pose[a], offset,
+                dim, w_sum);
         }
       }
     }
