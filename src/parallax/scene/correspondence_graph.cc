@@ -141,6 +141,11 @@ track_t CorrespondenceGraph::TrackOf(image_t image_id, point2D_t point2D_idx) co
   return node_track_[entry.node_offset + point2D_idx];
 }
 
+const track_t* CorrespondenceGraph::TracksOfImage(image_t image_id) const {
+  PARALLAX_CHECK(finalized_);
+  return node_track_.data() + images_.at(image_id).node_offset;
+}
+
 size_t CorrespondenceGraph::NumMatchesBetween(image_t image_id1, image_t image_id2) const {
   const auto it = pair_matches_.find(ImagePairToPairId(image_id1, image_id2));
   return it == pair_matches_.end() ? 0 : it->second.size();

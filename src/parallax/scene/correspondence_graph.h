@@ -45,6 +45,9 @@ class CorrespondenceGraph {
   size_t NumTracks() const { return tracks_.size(); }
   const std::vector<TrackElement>& TrackElements(track_t track_id) const { return tracks_[track_id]; }
   track_t TrackOf(image_t image_id, point2D_t point2D_idx) const;
+  // The tracks of all the image's keypoints in order (kInvalidTrackId where none),
+  // NumPoints2D(image_id) of them: one lookup for loops over an image's keypoints.
+  const track_t* TracksOfImage(image_t image_id) const;
   const TrackStats& Stats() const { return stats_; }
 
   // Verified matches of a pair as added (oriented so point2D_idx1 is in the smaller id).

@@ -26,6 +26,10 @@ TEST(CorrespondenceGraph, ChainsMatchesIntoTracks) {
   EXPECT_EQ(graph.NumMatchesBetween(2, 3), 1u);
   EXPECT_EQ(graph.NeighborsOf(2).at(1), 2u);
   EXPECT_EQ(graph.PairMatches().at(ImagePairToPairId(2, 3)).front().point2D_idx1, 1u);
+  for (image_t id = 1; id <= 3; ++id) {
+    const track_t* tracks = graph.TracksOfImage(id);
+    for (point2D_t idx = 0; idx < 5; ++idx) EXPECT_EQ(tracks[idx], graph.TrackOf(id, idx));
+  }
 }
 
 TEST(CorrespondenceGraph, SplitsInconsistentComponentInsteadOfDropping) {

@@ -1,5 +1,6 @@
 #include "parallax/scene/reconstruction.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -32,10 +33,51 @@ const Image& Reconstruction::GetImage(image_t image_id) const {
 Image& Reconstruction::GetImage(image_t image_id) {
   return const_cast<Image&>(static_cast<const Reconstruction*>(this)->GetImage(image_id));
 }
-const Point3D& Reconstruction::GetPoint3D(point3D_t point3D_id) const {
+Reconstruction::Reconstruction(const Reconstruction& other)
+    : cameras_(other.cameras_), images_(other.images_), points3D_(other.points3D_),
+      next_point3D_id_(other.next_point3D_id_) {
+  IndexPoints3DBelow(other.point_index_.size());
+}
+
+Reconstruction& Reconstruction::operator=(const Reconstruction& other) {
+  if (this == &other) return *this;
+  cameras_ = other.cameras_;
+  images_ = other.images_;
+  points3D_ = other.points3D_;
+  next_point3D_id_ = other.next_point3D_id_;
+  point_index_.clear();
+  IndexPoints3DBelow(other.point_index_.size());
+  return *this;
+}
+
+Point3D* Reconstruction::FindPoint3D(point3D_t point3D_id) const {
+  if (point3D_id < point_index_.size()) return point_index_[point3D_id];
   const auto it = points3D_.find(point3D_id);
-  PARALLAX_CHECK_MSG(it != points3D_.end(), "no 3D point " << point3D_id);
-  return it->second;
+  return it == points3D_.end() ? nullptr : const_cast<Point3D*>(&it->second);
+}
+
+void Reconstruction::IndexPoints3DBelow(size_t end) {
+  const size_t begin = point_index_.size();
+  if (end <= begin) return;
+  point_index_.resize(end, nullptr);
+  for (auto it = points3D_.lower_bound(static_cast<point3D_t>(begin));
+       it != points3D_.end() && it->first < end; ++it) {
+    point_index_[it->first] = &it->second;
+  }
+}
+
+void Reconstruction::IndexPoint3D(point3D_t point3D_id, Point3D* point) {
+  if (point3D_id < point_index_.size()) {
+    point_index_[point3D_id] = point;
+  } else if (point3D_id < 4 * (points3D_.size() + 1024)) {
+    IndexPoints3DBelow(std::max<size_t>(point3D_id + 1, 2 * point_index_.size()));
+  }
+}
+
+const Point3D& Reconstruction::GetPoint3D(point3D_t point3D_id) const {
+  const Point3D* point = FindPoint3D(point3D_id);
+  PARALLAX_CHECK_MSG(point != nullptr, "no 3D point " << point3D_id);
+  return *point;
 }
 Point3D& Reconstruction::GetPoint3D(point3D_t point3D_id) {
   return const_cast<Point3D&>(static_cast<const Reconstruction*>(this)->GetPoint3D(point3D_id));
@@ -73,7 +115,8 @@ point3D_t Reconstruction::AddPoint3D(const Eigen::Vector3d& xyz, Track track,
   point.xyz = xyz;
   point.color = color;
   point.track = std::move(track);
-  points3D_.emplace(point3D_id, std::move(point));
+  Point3D* added = &points3D_.emplace(point3D_id, std::move(point)).first->second;
+  IndexPoint3D(point3D_id, added);
   return point3D_id;
 }
 
@@ -90,7 +133,8 @@ void Reconstruction::AddPoint3DWithId(point3D_t point3D_id, Point3D point) {
     if (!point2D.HasPoint3D()) ++image.num_points3D;
     point2D.point3D_id = point3D_id;
   }
-  points3D_.emplace(point3D_id, std::move(point));
+  Point3D* added = &points3D_.emplace(point3D_id, std::move(point)).first->second;
+  IndexPoint3D(point3D_id, added);
   next_point3D_id_ = std::max(next_point3D_id_, point3D_id + 1);
 }
 
@@ -128,6 +172,7 @@ void Reconstruction::DeletePoint3D(point3D_t point3D_id) {
     image.points2D[element.point2D_idx].point3D_id = kInvalidPoint3DId;
     --image.num_points3D;
   }
+  if (point3D_id < point_index_.size()) point_index_[point3D_id] = nullptr;
   points3D_.erase(it);
 }
 

@@ -20,13 +20,19 @@ namespace parallax {
 // deterministic.
 class Reconstruction {
  public:
+  Reconstruction() = default;
+  Reconstruction(const Reconstruction& other);
+  Reconstruction& operator=(const Reconstruction& other);
+  Reconstruction(Reconstruction&&) = default;  // Map nodes move with the map: the index holds.
+  Reconstruction& operator=(Reconstruction&&) = default;
+
   const std::map<camera_t, Camera>& Cameras() const { return cameras_; }
   const std::map<image_t, Image>& Images() const { return images_; }
   const std::map<point3D_t, Point3D>& Points3D() const { return points3D_; }
 
   bool ExistsCamera(camera_t camera_id) const { return cameras_.count(camera_id) > 0; }
   bool ExistsImage(image_t image_id) const { return images_.count(image_id) > 0; }
-  bool ExistsPoint3D(point3D_t point3D_id) const { return points3D_.count(point3D_id) > 0; }
+  bool ExistsPoint3D(point3D_t point3D_id) const { return FindPoint3D(point3D_id) != nullptr; }
 
   const Camera& GetCamera(camera_t camera_id) const;
   Camera& GetCamera(camera_t camera_id);
@@ -75,9 +81,21 @@ class Reconstruction {
   void Transform(const Sim3d& new_from_old);
 
  private:
+  // The point with this id, or nullptr: O(1) for indexed ids, else a map lookup.
+  Point3D* FindPoint3D(point3D_t point3D_id) const;
+  // Makes point_index_ cover ids below `end`, filling the new slots from the map.
+  void IndexPoints3DBelow(size_t end);
+  // After a point was emplaced: index it when its id is within a few times the point count
+  // (ids from AddPoint3D always are; a stray huge id read from a file is not worth the memory).
+  void IndexPoint3D(point3D_t point3D_id, Point3D* point);
+
   std::map<camera_t, Camera> cameras_;
   std::map<image_t, Image> images_;
   std::map<point3D_t, Point3D> points3D_;
+  // Pointers into points3D_ by id (nullptr: no such point), so that the mapper's many
+  // existence checks and lookups do not walk the tree. std::map nodes never move, so the
+  // pointers stay valid until their point is erased; copies rebuild them.
+  std::vector<Point3D*> point_index_;
   point3D_t next_point3D_id_ = 1;
 };
 

@@ -43,6 +43,78 @@ TEST(Reconstruction, ObservationsStayConsistent) {
   EXPECT_FALSE(reconstruction.GetImage(2).points2D[1].HasPoint3D());
 }
 
+// Lookups by id stay right through additions, deletions, copies, moves, preset ids (small and
+// far beyond the points added) and many points (the index grows).
+TEST(Reconstruction, PointLookupsByIdSurviveEditsAndCopies) {
+  Reconstruction reconstruction = TwoImageScene();
+  std::vector<point3D_t> ids;
+  for (point2D_t idx = 0; idx < 4; ++idx) {
+    Track track;
+    track.AddElement(1, idx);
+    track.AddElement(2, idx);
+    ids.push_back(reconstruction.AddPoint3D(Eigen::Vector3d(idx, 0, 5), track));
+  }
+  reconstruction.DeletePoint3D(ids[1]);
+  Point3D far;
+  far.xyz = Eigen::Vector3d(7, 7, 7);
+  far.track.AddElement(3, 0);
+  far.track.AddElement(2, 1);
+  const point3D_t far_id = 4000000000u;
+  reconstruction.AddPoint3DWithId(far_id, far);
+  Point3D near = far;
+  near.xyz = Eigen::Vector3d(8, 8, 8);
+  near.track.elements = {{3, 1}, {1, 1}};
+  reconstruction.AddPoint3DWithId(100, near);
+
+  const auto expect_points = [&](const Reconstruction& model) {
+    EXPECT_TRUE(model.ExistsPoint3D(ids[0]));
+    EXPECT_FALSE(model.ExistsPoint3D(ids[1]));
+    EXPECT_EQ(model.GetPoint3D(ids[3]).xyz.x(), 3.0);
+    EXPECT_EQ(model.GetPoint3D(far_id).xyz.x(), 7.0);
+    EXPECT_EQ(model.GetPoint3D(100).xyz.x(), 8.0);
+    EXPECT_FALSE(model.ExistsPoint3D(99));
+    EXPECT_FALSE(model.ExistsPoint3D(far_id - 1));
+    EXPECT_THROW(model.GetPoint3D(ids[1]), CheckError);
+    // Ids handed out after a preset one continue above it.
+    EXPECT_EQ(model.NumPoints3D(), 5u);
+  };
+  expect_points(reconstruction);
+  Reconstruction copy = reconstruction;
+  reconstruction.DeletePoint3D(ids[0]);  // The copy keeps its own.
+  expect_points(copy);
+  Reconstruction assigned;
+  assigned = copy;
+  expect_points(assigned);
+  const Reconstruction moved = std::move(copy);
+  expect_points(moved);
+  // The copy's lookups point into the copy: editing it leaves the original alone.
+  assigned.GetPoint3D(ids[3]).xyz.x() = -1;
+  EXPECT_EQ(moved.GetPoint3D(ids[3]).xyz.x(), 3.0);
+
+  // Thousands of points: the index grows past its first sizes.
+  Reconstruction many = TwoImageScene();
+  for (image_t id = 4; id <= 3000; ++id) {
+    Image image;
+    image.image_id = id;
+    image.camera_id = 1;
+    image.name = "image" + std::to_string(id);
+    image.points2D.resize(1);
+    many.AddImage(image);
+  }
+  std::vector<point3D_t> many_ids;
+  for (image_t id = 4; id < 3000; id += 2) {
+    Track track;
+    track.AddElement(id, 0);
+    track.AddElement(id + 1, 0);
+    many_ids.push_back(many.AddPoint3D(Eigen::Vector3d(id, 0, 1), track));
+  }
+  for (size_t i = 0; i < many_ids.size(); i += 3) many.DeletePoint3D(many_ids[i]);
+  for (size_t i = 0; i < many_ids.size(); ++i) {
+    ASSERT_EQ(many.ExistsPoint3D(many_ids[i]), i % 3 != 0) << i;
+    if (i % 3 != 0) EXPECT_EQ(many.GetPoint3D(many_ids[i]).xyz.x(), 4.0 + 2 * i);
+  }
+}
+
 TEST(Reconstruction, MergeAndDeregister) {
   Reconstruction reconstruction = TwoImageScene();
   Track track1, track2;

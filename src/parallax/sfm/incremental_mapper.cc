@@ -234,8 +234,9 @@ class IncrementalMapper::ModelBuilder {
     std::vector<Eigen::Vector2d> points2D;
     std::vector<Eigen::Vector3d> points3D;
     std::vector<std::pair<point2D_t, point3D_t>> links;
+    const track_t* tracks = input_.correspondence_graph.TracksOfImage(image_id);
     for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
-      const track_t track_id = input_.correspondence_graph.TrackOf(image_id, idx);
+      const track_t track_id = tracks[idx];
       if (track_id == kInvalidTrackId) continue;
       const point3D_t point3D_id = model_.PointOfTrack(track_id);
       if (point3D_id == kInvalidPoint3DId) continue;

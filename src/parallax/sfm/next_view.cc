@@ -19,9 +19,9 @@ double VisibilityScore(image_t image_id, const TrackedReconstruction& model) {
   }
   size_t num_visible = 0;
   double score = 0;
-  const CorrespondenceGraph& graph = model.Graph();
+  const track_t* tracks = model.Graph().TracksOfImage(image_id);
   for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
-    const track_t track_id = graph.TrackOf(image_id, idx);
+    const track_t track_id = tracks[idx];
     if (track_id == kInvalidTrackId || model.PointOfTrack(track_id) == kInvalidPoint3DId) continue;
     ++num_visible;
     const Eigen::Vector2d& xy = image.points2D[idx].xy;

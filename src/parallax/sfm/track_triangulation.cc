@@ -172,10 +172,10 @@ size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
 size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_id,
                         TrackedReconstruction* model) {
   const Image& image = model->Model().GetImage(image_id);
-  const CorrespondenceGraph& graph = model->Graph();
+  const track_t* tracks = model->Graph().TracksOfImage(image_id);
   size_t num_added = 0;
   for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
-    const track_t track_id = graph.TrackOf(image_id, idx);
+    const track_t track_id = tracks[idx];
     if (track_id == kInvalidTrackId) continue;
     if (model->PointOfTrack(track_id) != kInvalidPoint3DId) {
       num_added += ContinueTrack(options, track_id, model);
