@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <map>
+#include <unordered_map>
+#include <unordered_set>
 #include <set>
 
 #include "parallax/util/check.h"
@@ -47,11 +49,12 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
   }
   std::sort(point3D_ids.begin(), point3D_ids.end());
   point3D_ids.erase(std::unique(point3D_ids.begin(), point3D_ids.end()), point3D_ids.end());
+  const std::unordered_set<image_t> config_image_ids(config.images.begin(), config.images.end());
   std::set<image_t> outside_image_ids;
   std::set<camera_t> outside_camera_ids;
   for (const point3D_t point3D_id : point3D_ids) {
     for (const TrackElement& element : reconstruction->GetPoint3D(point3D_id).track.elements) {
-      if (config.images.count(element.image_id) > 0) continue;
+      if (config_image_ids.count(element.image_id) > 0) continue;
       const Image& image = reconstruction->GetImage(element.image_id);
       if (!image.registered) continue;
       outside_image_ids.insert(element.image_id);
@@ -61,13 +64,16 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
     }
   }
 
-  std::map<point3D_t, int> point_index;
+  // Hash maps for the lookups (one per observation); the problem's order stays that of the
+  // sorted ids above.
+  std::unordered_map<point3D_t, int> point_index;
+  point_index.reserve(point3D_ids.size());
   for (const point3D_t point3D_id : point3D_ids) {
     point_index.emplace(point3D_id, static_cast<int>(problem.points.size()));
     problem.points.push_back({&reconstruction->GetPoint3D(point3D_id).xyz,
                               config.constant_points.count(point3D_id) > 0});
   }
-  std::map<image_t, int> pose_index;
+  std::unordered_map<image_t, int> pose_index;
   const auto add_pose = [&](image_t image_id, bool constant) {
     BundleAdjustmentProblem::Pose pose;
     pose.image_id = image_id;
@@ -81,7 +87,7 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
   };
   for (const image_t image_id : config.images) add_pose(image_id, false);
   for (const image_t image_id : outside_image_ids) add_pose(image_id, true);
-  std::map<camera_t, int> camera_index;
+  std::unordered_map<camera_t, int> camera_index;
   const auto add_camera = [&](camera_t camera_id, bool constant) {
     Camera& camera = reconstruction->GetCamera(camera_id);
     BundleAdjustmentProblem::CameraBlock block;
@@ -113,7 +119,9 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
   }
   for (size_t j = 0; j < point3D_ids.size(); ++j) {
     for (const TrackElement& element : reconstruction->GetPoint3D(point3D_ids[j]).track.elements) {
-      if (outside_image_ids.count(element.image_id) == 0) continue;
+      // Outside images were posed after the config's.
+      const auto pose = pose_index.find(element.image_id);
+      if (pose == pose_index.end() || pose->second < static_cast<int>(config.images.size())) continue;
       const Image& image = reconstruction->GetImage(element.image_id);
       add_observation(image, image.points2D[element.point2D_idx].xy, static_cast<int>(j));
     }

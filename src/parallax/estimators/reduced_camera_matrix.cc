@@ -25,6 +25,13 @@ void ReducedMatrixStructure::Couple(std::vector<int> offsets) {
     const uint64_t row = static_cast<uint64_t>(BlockAt(offsets[a]));
     for (size_t b = 0; b <= a; ++b) pairs_.push_back(row << 32 | static_cast<uint64_t>(BlockAt(offsets[b])));
   }
+  // Most pairs repeat (every point of two images couples them again): fold the repeats away
+  // whenever the list has doubled, so that it stays near the number of distinct blocks.
+  if (pairs_.size() >= 2 * num_distinct_pairs_ + (size_t{1} << 20)) {
+    std::sort(pairs_.begin(), pairs_.end());
+    pairs_.erase(std::unique(pairs_.begin(), pairs_.end()), pairs_.end());
+    num_distinct_pairs_ = pairs_.size();
+  }
 }
 
 void ReducedMatrixStructure::Finalize() {

@@ -41,6 +41,25 @@ TEST(ReducedMatrixStructure, StoresCoupledBlocksAndTheDiagonalOnly) {
   EXPECT_EQ(structure.NumValues(), 5u * 36 + 9 + 4 * 36 + 2 * 18);
 }
 
+// Millions of repeated couplings (every point of a pair couples it again) fold into the
+// distinct blocks along the way and give the same structure.
+TEST(ReducedMatrixStructure, RepeatedCouplingsGiveTheSameStructure) {
+  ReducedMatrixStructure structure;
+  for (int block = 0; block < 5; ++block) structure.AddVariableBlock(6 * block, 6);
+  structure.AddVariableBlock(30, 3);
+  for (int repeat = 0; repeat < 400000; ++repeat) {
+    const int block = repeat % 4;
+    structure.Couple({6 * block, 6 * (block + 1)});
+    if (repeat % 1000 == 0) structure.Couple({30, 6});
+    if (repeat % 1000 == 500) structure.Couple({24, 30});
+  }
+  structure.Finalize();
+  const ReducedMatrixStructure chain = ChainStructure();
+  EXPECT_EQ(structure.RowBegin(), chain.RowBegin());
+  EXPECT_EQ(structure.Cols(), chain.Cols());
+  EXPECT_EQ(structure.ValuesBegin(), chain.ValuesBegin());
+}
+
 // A random symmetric positive definite matrix with the structure's pattern, written into both
 // storages block by block as the solver writes them.
 void FillBoth(const ReducedMatrixStructure& structure, DenseReducedMatrix* dense,

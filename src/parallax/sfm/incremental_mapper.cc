@@ -473,10 +473,15 @@ class IncrementalMapper::ModelBuilder {
                            const BundleAdjustmentConfig& config) {
     const BundleAdjustmentSummary ba_summary = BundleAdjust(ba_options, config, &reconstruction_);
     summary_->ba_seconds += ba_summary.seconds;
+    const std::string linear_iterations =
+        ba_summary.num_linear_iterations > 0
+            ? ", " + std::to_string(ba_summary.num_linear_iterations) + " CG iterations"
+            : "";
     PARALLAX_LOG(Debug) << "mapper: BA over " << config.images.size() << " images, "
                         << ba_summary.num_residuals << " observations: "
-                        << ba_summary.num_iterations << " iterations, " << ba_summary.seconds
-                        << " s, " << ba_summary.solver << " (" << ba_summary.termination << ")";
+                        << ba_summary.num_iterations << " iterations" << linear_iterations << ", "
+                        << ba_summary.seconds << " s, " << ba_summary.solver << " ("
+                        << ba_summary.termination << ")";
   }
 
   const IncrementalMapperOptions& options_;
