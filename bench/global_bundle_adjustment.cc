@@ -4,9 +4,12 @@
 //
 //   build/bench/global_bundle_adjustment MODEL_DIR [SOLVER...]   (default: all solvers)
 //
-// SOLVER is a --ba-solver name (dense-schur, sparse-schur, ceres, ceres-iterative). MODEL_DIR is a COLMAP
-// model, e.g. OUT/sparse/0 of `parallax mapper` on `synth --layout aerial`.
+// SOLVER is a --ba-solver name (dense-schur, sparse-schur, ceres, ceres-iterative). MODEL_DIR is a
+// COLMAP model, e.g. OUT/sparse/0 of `parallax mapper` on `synth --layout aerial`.
+// PARALLAX_CG_TOLERANCE sets the sparse solver's relative CG tolerance;
+// PARALLAX_BA_REFINE_INTRINSICS=1 frees focal length and distortion.
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -39,8 +42,10 @@ Reconstruction Perturbed(const Reconstruction& model) {
   for (const image_t image_id : model.RegImageIds()) {
     Rigid3d& pose = perturbed.GetImage(image_id).cam_from_world;
     const Eigen::Vector3d axis =
-        Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1)).normalized();
-    pose.rotation = (pose.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(0.002, axis))).normalized();
+        Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
+            .normalized();
+    pose.rotation =
+        (pose.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(0.002, axis))).normalized();
   }
   return perturbed;
 }
@@ -56,7 +61,9 @@ int Run(int argc, char** argv) {
   const Reconstruction start = Perturbed(model);
   std::printf("%zu images, %zu points, %zu observations\n", model.NumRegImages(),
               model.NumPoints3D(), model.NumObservations());
-  std::printf("| solver | seconds | iterations | s/iteration | CG iterations | initial cost | final cost |\n");
+  std::printf(
+      "| solver | seconds | iterations | s/iteration | CG iterations | initial cost | final cost "
+      "|\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
   for (const std::string& name : solvers) {
     const auto solver = BundleAdjustmentSolverFromName(name);
@@ -69,17 +76,28 @@ int Run(int argc, char** argv) {
     options.max_dense_schur_variables = 1 << 30;
     options.loss_function = LossFunctionType::kTrivial;
     options.max_num_iterations = 20;
+    if (const char* tolerance = std::getenv("PARALLAX_CG_TOLERANCE")) {
+      options.conjugate_gradient.relative_tolerance = std::atof(tolerance);
+    }
     BundleAdjustmentConfig config;
     const std::vector<image_t> image_ids = start.RegImageIds();
     for (const image_t image_id : image_ids) config.AddImage(image_id);
     config.SetConstantPose(image_ids.front());
-    for (const auto& [camera_id, camera] : start.Cameras()) config.constant_cameras.insert(camera_id);
+    // PARALLAX_BA_REFINE_INTRINSICS=1: focal length and distortion free, as in the mapper's
+    // global adjustments of cameras without a prior.
+    if (std::getenv("PARALLAX_BA_REFINE_INTRINSICS") != nullptr) {
+      options.refine_focal_length = true;
+      options.refine_extra_params = true;
+    } else {
+      for (const auto& [camera_id, camera] : start.Cameras())
+        config.constant_cameras.insert(camera_id);
+    }
     Reconstruction reconstruction = start;
     const BundleAdjustmentSummary summary = BundleAdjust(options, config, &reconstruction);
     std::printf("| %s | %.2f | %d | %.3f | %d | %.6g | %.6g |\n", summary.solver.c_str(),
                 summary.seconds, summary.num_iterations,
-                summary.seconds / std::max(1, summary.num_iterations), summary.num_linear_iterations,
-                summary.initial_cost, summary.final_cost);
+                summary.seconds / std::max(1, summary.num_iterations),
+                summary.num_linear_iterations, summary.initial_cost, summary.final_cost);
     std::fflush(stdout);
   }
   return 0;

@@ -1,7 +1,6 @@
 #include "parallax/estimators/reduced_camera_matrix.h"
 
 #include <Eigen/Cholesky>
-
 #include <algorithm>
 #include <cmath>
 
@@ -23,7 +22,8 @@ void ReducedMatrixStructure::Couple(std::vector<int> offsets) {
   offsets.erase(std::unique(offsets.begin(), offsets.end()), offsets.end());
   for (size_t a = 0; a < offsets.size(); ++a) {
     const uint64_t row = static_cast<uint64_t>(BlockAt(offsets[a]));
-    for (size_t b = 0; b <= a; ++b) pairs_.push_back(row << 32 | static_cast<uint64_t>(BlockAt(offsets[b])));
+    for (size_t b = 0; b <= a; ++b)
+      pairs_.push_back(row << 32 | static_cast<uint64_t>(BlockAt(offsets[b])));
   }
   // Most pairs repeat (every point of two images couples them again): fold the repeats away
   // whenever the list has doubled, so that it stays near the number of distinct blocks.
@@ -65,12 +65,14 @@ int ReducedMatrixStructure::FindBlock(int row, int col) const {
 }
 
 double* BlockSparseReducedMatrix::BlockValues(int row_offset, int col_offset) {
-  const int index = structure_->FindBlock(structure_->BlockAt(row_offset), structure_->BlockAt(col_offset));
+  const int index =
+      structure_->FindBlock(structure_->BlockAt(row_offset), structure_->BlockAt(col_offset));
   PARALLAX_CHECK_GE(index, 0);
   return values_.data() + structure_->ValuesBegin()[index];
 }
 
-BlockSparseReducedMatrix& BlockSparseReducedMatrix::operator+=(const BlockSparseReducedMatrix& other) {
+BlockSparseReducedMatrix& BlockSparseReducedMatrix::operator+=(
+    const BlockSparseReducedMatrix& other) {
   PARALLAX_CHECK_EQ(values_.size(), other.values_.size());
   for (size_t i = 0; i < values_.size(); ++i) values_[i] += other.values_[i];
   return *this;
@@ -102,15 +104,25 @@ void BlockSparseReducedMatrix::Multiply(const Eigen::VectorXd& x, Eigen::VectorX
       const int col = s.Cols()[index];
       const int col_offset = s.BlockOffset(col);
       const int cols = s.BlockSize(col);
-      const Eigen::Map<const Eigen::MatrixXd> block(values_.data() + s.ValuesBegin()[index], rows, cols);
+      const double* values = values_.data() + s.ValuesBegin()[index];
+      if (rows == 6 && cols == 6) {  // Pose-pose: almost all blocks, at fixed size.
+        const Eigen::Map<const Eigen::Matrix<double, 6, 6>> block(values);
+        y->segment<6>(row_offset).noalias() += block * x.segment<6>(col_offset);
+        if (col != row)
+          y->segment<6>(col_offset).noalias() += block.transpose() * x.segment<6>(row_offset);
+        continue;
+      }
+      const Eigen::Map<const Eigen::MatrixXd> block(values, rows, cols);
       y->segment(row_offset, rows).noalias() += block * x.segment(col_offset, cols);
-      if (col != row) y->segment(col_offset, cols).noalias() += block.transpose() * x.segment(row_offset, rows);
+      if (col != row)
+        y->segment(col_offset, cols).noalias() += block.transpose() * x.segment(row_offset, rows);
     }
   }
 }
 
-bool BlockSparseReducedMatrix::Solve(const Eigen::VectorXd& b, const ConjugateGradientOptions& options,
-                                     Eigen::VectorXd* x, int* num_iterations) const {
+bool BlockSparseReducedMatrix::Solve(const Eigen::VectorXd& b,
+                                     const ConjugateGradientOptions& options, Eigen::VectorXd* x,
+                                     int* num_iterations) const {
   const ReducedMatrixStructure& s = *structure_;
   *num_iterations = 0;
   // Block-Jacobi preconditioner: the inverse of each diagonal block.

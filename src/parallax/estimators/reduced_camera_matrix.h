@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -47,7 +46,7 @@ class ReducedMatrixStructure {
   std::vector<int> block_offsets_;
   std::vector<int> block_sizes_;
   std::vector<int> block_of_offset_;
-  std::vector<uint64_t> pairs_;  // row << 32 | col, until Finalize().
+  std::vector<uint64_t> pairs_;    // row << 32 | col, until Finalize().
   size_t num_distinct_pairs_ = 0;  // Size of pairs_ after its last deduplication.
   std::vector<int> row_begin_;
   std::vector<int> cols_;

@@ -75,7 +75,8 @@ void FillBoth(const ReducedMatrixStructure& structure, DenseReducedMatrix* dense
       for (int r = 0; r < rows; ++r) {
         for (int c = 0; c < cols; ++c) block(r, c) = RandomUniformReal(-1.0, 1.0);
       }
-      if (row == col) block = block * block.transpose() + 40.0 * Eigen::MatrixXd::Identity(rows, rows);
+      if (row == col)
+        block = block * block.transpose() + 40.0 * Eigen::MatrixXd::Identity(rows, rows);
       const int row_offset = structure.BlockOffset(row);
       const int col_offset = structure.BlockOffset(col);
       dense->Block(row_offset, col_offset, rows, cols) = block;
