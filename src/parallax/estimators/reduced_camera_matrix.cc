@@ -78,19 +78,16 @@ BlockSparseReducedMatrix& BlockSparseReducedMatrix::operator+=(
   return *this;
 }
 
-double BlockSparseReducedMatrix::Diagonal(int d) const {
+size_t BlockSparseReducedMatrix::DiagonalIndex(int d) const {
   const int block = structure_->BlockAt(d);
   const int local = d - structure_->BlockOffset(block);
-  const size_t begin = structure_->ValuesBegin()[structure_->FindBlock(block, block)];
-  return values_[begin + static_cast<size_t>(local * structure_->BlockSize(block) + local)];
+  return structure_->ValuesBegin()[structure_->FindBlock(block, block)] +
+         static_cast<size_t>(local * structure_->BlockSize(block) + local);
 }
 
-void BlockSparseReducedMatrix::AddToDiagonal(int d, double value) {
-  const int block = structure_->BlockAt(d);
-  const int local = d - structure_->BlockOffset(block);
-  const size_t begin = structure_->ValuesBegin()[structure_->FindBlock(block, block)];
-  values_[begin + static_cast<size_t>(local * structure_->BlockSize(block) + local)] += value;
-}
+double BlockSparseReducedMatrix::Diagonal(int d) const { return values_[DiagonalIndex(d)]; }
+
+void BlockSparseReducedMatrix::AddToDiagonal(int d, double value) { values_[DiagonalIndex(d)] += value; }
 
 // y = S x from the lower blocks: block (r, c) adds B x_c to y_r and, off the diagonal,
 // B^T x_r to y_c.

@@ -115,6 +115,7 @@ class BlockSparseReducedMatrix {
 
  private:
   double* BlockValues(int row_offset, int col_offset);
+  size_t DiagonalIndex(int d) const;  // Of entry (d, d) in values_.
   void Multiply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const;
 
   const ReducedMatrixStructure* structure_ = nullptr;

@@ -707,20 +707,28 @@ size_t NumReducedCameraVariables(const BundleAdjustmentProblem& problem) {
   return n;
 }
 
+namespace {
+
+template <typename ReducedMatrix>
+BundleAdjustmentSummary SolveWithSchur(const BundleAdjustmentOptions& options,
+                                       const ceres::LossFunction* loss, BundleAdjustmentProblem* problem) {
+  PARALLAX_CHECK(problem != nullptr);
+  SchurSolver<ReducedMatrix> solver(options, loss, problem);
+  return solver.Solve();
+}
+
+}  // namespace
+
 BundleAdjustmentSummary SolveWithDenseSchur(const BundleAdjustmentOptions& options,
                                             const ceres::LossFunction* loss,
                                             BundleAdjustmentProblem* problem) {
-  PARALLAX_CHECK(problem != nullptr);
-  SchurSolver<DenseReducedMatrix> solver(options, loss, problem);
-  return solver.Solve();
+  return SolveWithSchur<DenseReducedMatrix>(options, loss, problem);
 }
 
 BundleAdjustmentSummary SolveWithSparseSchur(const BundleAdjustmentOptions& options,
                                              const ceres::LossFunction* loss,
                                              BundleAdjustmentProblem* problem) {
-  PARALLAX_CHECK(problem != nullptr);
-  SchurSolver<BlockSparseReducedMatrix> solver(options, loss, problem);
-  return solver.Solve();
+  return SolveWithSchur<BlockSparseReducedMatrix>(options, loss, problem);
 }
 
 }  // namespace parallax
