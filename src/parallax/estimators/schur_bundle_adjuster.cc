@@ -29,7 +29,7 @@ constexpr int kMaxCameraParams = 8;  // OPENCV's.
 
 using Matrix26 = Eigen::Matrix<double, 2, 6>;
 using Matrix23 = Eigen::Matrix<double, 2, 3>;
-using Matrix2C = Eigen::Matrix<double, 2, kMaxCameraParams>;
+using Matrix2X = Eigen::Matrix<double, 2, Eigen::Dynamic>;
 using Matrix63 = Eigen::Matrix<double, 6, 3>;
 using MatrixC3 = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kMaxCameraParams, 3>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
@@ -63,7 +63,7 @@ struct Parameters {
 // One observation's (loss-corrected) residual and Jacobians at the current parameters:
 // pose columns are the rotation increment (left-multiplied rotation vector), then the
 // translation. The intrinsics' Jacobian (free parameters in order) is kept apart, in
-// camera_jacobians_, since most adjustments hold the cameras fixed.
+// camera_jacobian_values_, since most adjustments hold the cameras fixed.
 struct ObservationJacobian {
   Eigen::Vector2d residual;
   Matrix26 pose;
@@ -125,7 +125,17 @@ class SchurSolver {
 
   Parameters parameters_;
   std::vector<ObservationJacobian> jacobians_;  // In observation_order_.
-  std::vector<Matrix2C> camera_jacobians_;      // Only when some camera is free.
+  // The k-th observation's intrinsics Jacobian, 2 x its camera's free parameters.
+  Eigen::Map<Matrix2X> CameraJacobian(size_t k, int dim) {
+    return Eigen::Map<Matrix2X>(camera_jacobian_values_.data() + k * camera_jacobian_stride_, 2, dim);
+  }
+  Eigen::Map<const Matrix2X> CameraJacobian(size_t k, int dim) const {
+    return Eigen::Map<const Matrix2X>(camera_jacobian_values_.data() + k * camera_jacobian_stride_, 2, dim);
+  }
+  // Only when some camera is free: per observation, room for the widest free camera (2 x 2
+  // for SIMPLE_RADIAL's focal length and k1, where a fixed 2 x 8 took four times the memory).
+  std::vector<double> camera_jacobian_values_;
+  size_t camera_jacobian_stride_ = 0;
   ReducedMatrixStructure structure_;
   ReducedMatrix u_;                             // Lower triangle.
   Eigen::VectorXd g_camera_;
@@ -197,7 +207,10 @@ void SchurSolver<ReducedMatrix>::Layout() {
   jacobians_.resize(num_observations);
   const bool any_free_camera =
       std::any_of(camera_offset_.begin(), camera_offset_.end(), [](int offset) { return offset >= 0; });
-  if (any_free_camera) camera_jacobians_.resize(num_observations);
+  if (any_free_camera) {
+    camera_jacobian_stride_ = 2 * static_cast<size_t>(*std::max_element(camera_dim_.begin(), camera_dim_.end()));
+    camera_jacobian_values_.resize(num_observations * camera_jacobian_stride_);
+  }
   v_.resize(num_points);
   g_point_.resize(num_points);
   v_inverse_.resize(num_points);
@@ -306,15 +319,13 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
           if (pose.constant_translation[axis]) jacobian.pose.col(3 + axis).setZero();
         }
         jacobian.point = d_img_d_cam * rotations[p];
-        Matrix2C* camera_jacobian = nullptr;
         const int dim = camera_dim_[c];
         if (camera_offset >= 0) {
-          camera_jacobian = &camera_jacobians_[k];
+          auto camera_jacobian = CameraJacobian(k, dim);
           const int num_params = static_cast<int>(parameters.camera_params[c].size());
           const std::vector<int>& free = problem_.cameras[c].free_params;
           for (int f = 0; f < dim; ++f) {
-            camera_jacobian->col(f) << d_img_d_params[free[f]],
-                d_img_d_params[num_params + free[f]];
+            camera_jacobian.col(f) << d_img_d_params[free[f]], d_img_d_params[num_params + free[f]];
           }
         }
         double scale = 1.0;
@@ -323,7 +334,7 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
           jacobian.residual *= scale;
           jacobian.pose *= scale;
           jacobian.point *= scale;
-          if (camera_jacobian != nullptr) camera_jacobian->leftCols(dim) *= scale;
+          if (camera_offset >= 0) CameraJacobian(k, dim) *= scale;
         }
         const int pose_offset = pose_offset_[p];
         if (pose_offset >= 0) {
@@ -331,7 +342,7 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
           g->segment<6>(pose_offset).noalias() += jacobian.pose.transpose() * jacobian.residual;
         }
         if (camera_offset >= 0) {
-          const auto camera_block = camera_jacobian->leftCols(dim);
+          const auto camera_block = CameraJacobian(k, dim);
           u->Block(camera_offset, camera_offset, dim, dim).noalias() +=
               camera_block.transpose() * camera_block;
           g->segment(camera_offset, dim).noalias() += camera_block.transpose() * jacobian.residual;
@@ -413,7 +424,7 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
         const int c = observation.camera;
         if (camera_offset_[c] >= 0) {
           w_camera[a].noalias() =
-              camera_jacobians_[k].leftCols(camera_dim_[c]).transpose() * jacobian.point;
+              CameraJacobian(k, camera_dim_[c]).transpose() * jacobian.point;
           y_camera[a].noalias() = w_camera[a] * v_inverse_[j];
           b.segment(camera_offset_[c], camera_dim_[c]).noalias() += y_camera[a] * g_point_[j];
         }
@@ -535,7 +546,7 @@ Eigen::Vector2d SchurSolver<ReducedMatrix>::CameraStepImage(size_t k,
   if (pose_offset >= 0) image += jacobians_[k].pose * camera_step.segment<6>(pose_offset);
   const int c = observation.camera;
   if (camera_offset_[c] >= 0) {
-    image += camera_jacobians_[k].leftCols(camera_dim_[c]) *
+    image += CameraJacobian(k, camera_dim_[c]) *
              camera_step.segment(camera_offset_[c], camera_dim_[c]);
   }
   return image;
