@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <set>
 
 #include "parallax/geometry/essential_matrix.h"
@@ -96,6 +97,40 @@ class IncrementalMapper::ModelBuilder {
       }
     }
     return false;
+  }
+
+  // Starts from the registered images of `seed` that this input holds and no earlier model
+  // used, with the seed's poses and intrinsics; every track they see is triangulated anew and
+  // the whole adjusted once. False (and nothing registered) when fewer than two qualify.
+  bool InitializeFromModel(const Reconstruction& seed) {
+    for (const auto& [camera_id, camera] : seed.Cameras()) {
+      if (reconstruction_.ExistsCamera(camera_id)) {
+        reconstruction_.GetCamera(camera_id).params = camera.params;
+      }
+    }
+    std::vector<image_t> seeded;
+    for (const image_t image_id : seed.RegImageIds()) {
+      if (!reconstruction_.ExistsImage(image_id) || !Available(image_id)) continue;
+      reconstruction_.GetImage(image_id).cam_from_world = seed.GetImage(image_id).cam_from_world;
+      reconstruction_.RegisterImage(image_id);
+      seeded.push_back(image_id);
+    }
+    if (seeded.size() < 2) {
+      for (const image_t image_id : seeded) reconstruction_.DeRegisterImage(image_id);
+      return false;
+    }
+    init_image_id1_ = seeded[0];
+    init_image_id2_ = seeded[1];
+    const size_t num_points = CompleteAllTracks(options_.triangulation, &model_);
+    PARALLAX_LOG(Info) << "mapper: starting from " << seeded.size() << " posed images, "
+                       << num_points << " observations triangulated";
+    GlobalBundleAdjust();
+    for (const image_t image_id : seeded) {
+      summary_->images[image_id].error_before_ba_px =
+          reconstruction_.MeanReprojectionErrorOfImage(image_id);
+    }
+    progress_->Increment(seeded.size());
+    return true;
   }
 
   // Registers images until none can be added, with bundle adjustment along the way.
@@ -504,6 +539,16 @@ IncrementalMapper::IncrementalMapper(const IncrementalMapperOptions& options,
 }
 
 std::vector<Reconstruction> IncrementalMapper::Reconstruct(MapperSummary* summary) {
+  return Run(nullptr, summary);
+}
+
+std::vector<Reconstruction> IncrementalMapper::Extend(const Reconstruction& seed,
+                                                      MapperSummary* summary) {
+  return Run(&seed, summary);
+}
+
+std::vector<Reconstruction> IncrementalMapper::Run(const Reconstruction* seed,
+                                                   MapperSummary* summary) {
   PARALLAX_CHECK(summary != nullptr);
   Timer timer;
   *summary = MapperSummary();
@@ -512,10 +557,13 @@ std::vector<Reconstruction> IncrementalMapper::Reconstruct(MapperSummary* summar
   std::vector<Reconstruction> models;
   std::set<image_t> used_images;
   // Registrations over all models; images that never register leave it short of the total.
-  ProgressReporter progress("mapping", input_.images.size());
+  std::optional<ProgressReporter> own_progress;
+  if (progress_ == nullptr) own_progress.emplace("mapping", input_.images.size());
+  ProgressReporter& progress = progress_ != nullptr ? *progress_ : *own_progress;
   while (static_cast<int>(models.size()) < options_.max_num_models) {
     ModelBuilder builder(options_, input_, used_images, summary, &progress);
-    if (!builder.Initialize()) break;
+    const bool seeded = seed != nullptr && models.empty() && builder.InitializeFromModel(*seed);
+    if (!seeded && !builder.Initialize()) break;
     builder.Grow();
     Reconstruction& model = builder.Model();
     const size_t num_registered = model.NumRegImages();
@@ -527,7 +575,7 @@ std::vector<Reconstruction> IncrementalMapper::Reconstruct(MapperSummary* summar
     }
     if (!options_.multiple_models) break;
   }
-  progress.Finish();
+  if (own_progress) own_progress->Finish();
   std::stable_sort(models.begin(), models.end(), [](const auto& a, const auto& b) {
     return a.NumRegImages() > b.NumRegImages();
   });

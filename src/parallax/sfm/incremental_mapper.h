@@ -11,6 +11,7 @@
 #include "parallax/sfm/mapper_input.h"
 #include "parallax/sfm/observation_filter.h"
 #include "parallax/sfm/track_triangulation.h"
+#include "parallax/util/progress.h"
 
 namespace parallax {
 
@@ -88,12 +89,23 @@ struct MapperSummary {
 class IncrementalMapper {
  public:
   IncrementalMapper(const IncrementalMapperOptions& options, const MapperInput& input);
+  // Maps from scratch.
   std::vector<Reconstruction> Reconstruct(MapperSummary* summary);
+  // Maps starting from the registered images of `seed` (ids of this input; poses and
+  // intrinsics as given, points triangulated anew from the tracks), as the last stage of
+  // partitioned mapping does with its merged clusters: the first model grows from the seed,
+  // further models start from what is left as usual.
+  std::vector<Reconstruction> Extend(const Reconstruction& seed, MapperSummary* summary);
+  // Counts registrations on `progress` (shared by mappers running side by side) instead of
+  // a "mapping" line of the mapper's own.
+  void SetProgress(ProgressReporter* progress) { progress_ = progress; }
 
  private:
   class ModelBuilder;
+  std::vector<Reconstruction> Run(const Reconstruction* seed, MapperSummary* summary);
   const IncrementalMapperOptions options_;
   const MapperInput& input_;
+  ProgressReporter* progress_ = nullptr;
 };
 
 // A copy holding only the registered images, the cameras they use, and the points.
