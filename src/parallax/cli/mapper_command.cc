@@ -23,11 +23,19 @@ int RunMapper(int argc, char** argv) {
   app.add_option("--output", output, "Output folder (sparse/<k>/, points.ply, summary.json)")
       ->required();
   app.add_option("--seed", seed, "Random seed")->capture_default_str();
+  app.add_option("--cluster", options.cluster_file,
+                 "Map only the images and pairs of this cluster file (as the hierarchical "
+                 "mapper writes them to OUT/clusters/)");
   AddMapperOptions(app, &options);
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
     SetPRNGSeed(seed);
+    options.hierarchical.random_seed = seed;
+    if (!options.cluster_file.empty() && options.mapper_type == MapperType::kHierarchical) {
+      throw InputError("--cluster maps one cluster incrementally; it cannot be combined with "
+                       "--mapper hierarchical");
+    }
     if (!std::filesystem::exists(database_path)) {
       throw InputError(database_path + ": database does not exist");
     }

@@ -45,6 +45,22 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
          "gradients above), dense-schur, sparse-schur, ceres or ceres-iterative")
       ->check(CLI::IsMember({"auto", "dense-schur", "sparse-schur", "ceres", "ceres-iterative"}))
       ->default_str("auto");
+  app.add_option_function<std::string>(
+         "--mapper",
+         [options](const std::string& name) {
+           options->mapper_type =
+               name == "hierarchical" ? MapperType::kHierarchical : MapperType::kIncremental;
+         },
+         "incremental, or hierarchical for large scenes: overlapping clusters of the view "
+         "graph mapped apart (written to OUT/clusters/), merged, then refined as one")
+      ->check(CLI::IsMember({"incremental", "hierarchical"}))
+      ->default_str("incremental");
+  app.add_option("--cluster-max-images", options->hierarchical.partition.max_cluster_images,
+                 "Hierarchical mapper: images per cluster before the overlap")
+      ->capture_default_str();
+  app.add_option("--cluster-overlap", options->hierarchical.partition.overlap_images,
+                 "Hierarchical mapper: images a cluster borrows from each neighbouring cluster")
+      ->capture_default_str();
   app.add_flag("!--no-text", options->write_text, "Do not write the .txt model files");
   app.add_flag("!--no-binary", options->write_binary, "Do not write the .bin model files");
 }

@@ -39,6 +39,8 @@ int RunReconstruct(int argc, char** argv) {
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
     SetPRNGSeed(seed);
+    options.mapping.hierarchical.random_seed = seed;
+    options.mapping.hierarchical.num_threads = num_threads;
     extraction_flags.Apply(&options.extraction);
     matching_flags.Apply(&options.matching);
     options.database_path = database_path;

@@ -14,6 +14,9 @@ namespace parallax {
 void MappingStageOptions::Check() const {
   input.Check();
   mapper.Check();
+  if (mapper_type == MapperType::kHierarchical) hierarchical.Check();
+  PARALLAX_CHECK_MSG(cluster_file.empty() || mapper_type == MapperType::kIncremental,
+                     "a cluster file is mapped by the incremental mapper");
   PARALLAX_CHECK_MSG(write_text || write_binary, "at least one model format must be written");
 }
 
@@ -94,13 +97,31 @@ void WriteModels(const std::vector<Reconstruction>& models, const std::filesyste
   if (!models.empty()) WritePointsPly(models.front(), output_dir / "points.ply");
 }
 
+void WriteClusterFiles(const MapperInput& input, const std::vector<std::vector<image_t>>& clusters,
+                       const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  fs::remove_all(dir, error);  // Clusters of an earlier partition would mislead.
+  CreateDirectoryOrThrow(dir);
+  for (size_t index = 0; index < clusters.size(); ++index) {
+    WriteImageCluster(MakeImageCluster(input, clusters[index]),
+                      dir / ("cluster-" + std::to_string(index) + ".txt"));
+  }
+}
+
 MappingStageResult RunMappingStage(const MappingStageOptions& options, const Database& database,
                                    const std::filesystem::path& image_dir,
                                    const std::filesystem::path& output_dir) {
   options.Check();
   MappingStageResult result;
   Timer timer;
-  const MapperInput input = LoadMapperInput(database, options.input);
+  MapperInput input = LoadMapperInput(database, options.input);
+  if (!options.cluster_file.empty()) {
+    const ImageCluster cluster = ReadImageCluster(options.cluster_file);
+    input = ClusterMapperInput(input, cluster, options.cluster_file.string());
+    PARALLAX_LOG(Info) << "mapper: cluster " << options.cluster_file.string() << ": "
+                       << cluster.image_names.size() << " images, " << cluster.pairs.size() << " pairs";
+  }
   for (const auto& [image_id, image] : input.images) {
     result.image_names[image_id] = image.name;
     result.num_keypoints[image_id] = image.points2D.size();
@@ -113,8 +134,16 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
                      << " inconsistent components split)";
   result.load_seconds = timer.ElapsedSeconds();
 
-  IncrementalMapper mapper(options.mapper, input);
-  result.models = mapper.Reconstruct(&result.summary);
+  if (options.mapper_type == MapperType::kHierarchical) {
+    HierarchicalMapper mapper(options.hierarchical, options.mapper, input);
+    const std::vector<std::vector<image_t>> clusters = mapper.Partition();
+    WriteClusterFiles(input, clusters, output_dir / "clusters");
+    result.hierarchical.emplace();
+    result.models = mapper.Reconstruct(clusters, &result.summary, &*result.hierarchical);
+  } else {
+    IncrementalMapper mapper(options.mapper, input);
+    result.models = mapper.Reconstruct(&result.summary);
+  }
   if (result.models.empty()) return result;
 
   timer.Restart();

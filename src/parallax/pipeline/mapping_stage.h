@@ -2,17 +2,29 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "parallax/scene/database.h"
+#include "parallax/sfm/hierarchical_mapper.h"
 #include "parallax/sfm/incremental_mapper.h"
 
 namespace parallax {
 
+enum class MapperType {
+  kIncremental,   // One incremental mapper over all images.
+  kHierarchical,  // Overlapping clusters mapped apart, merged, refined (large scenes).
+};
+
 struct MappingStageOptions {
   MapperInputOptions input;
   IncrementalMapperOptions mapper;
+  MapperType mapper_type = MapperType::kIncremental;
+  HierarchicalMapperOptions hierarchical;  // With kHierarchical.
+  // When set, only the images and pairs of this cluster file are mapped (incrementally): the
+  // unit of work of a partitioned run.
+  std::filesystem::path cluster_file;
   bool write_text = true;    // cameras.txt, images.txt, points3D.txt
   bool write_binary = true;  // the .bin twins
   void Check() const;
@@ -22,18 +34,24 @@ struct MappingStageOptions {
 struct MappingStageResult {
   std::vector<Reconstruction> models;  // Largest first; empty when no model could start.
   MapperSummary summary;
+  std::optional<HierarchicalMapperSummary> hierarchical;  // With MapperType::kHierarchical.
   std::map<image_t, std::string> image_names;
   std::map<image_t, size_t> num_keypoints;
   double load_seconds = 0;
   double write_seconds = 0;
 };
 
-// Loads the database, runs the incremental mapper, colours the points from the images in
-// `image_dir` (when readable) and writes OUT/sparse/<k>/ and OUT/points.ply atomically.
-// Nothing is written when no model could be started.
+// Loads the database, runs the mapper, colours the points from the images in `image_dir`
+// (when readable) and writes OUT/sparse/<k>/ and OUT/points.ply atomically; the hierarchical
+// mapper also writes its clusters as OUT/clusters/cluster-<k>.txt. Nothing is written when
+// no model could be started.
 MappingStageResult RunMappingStage(const MappingStageOptions& options, const Database& database,
                                    const std::filesystem::path& image_dir,
                                    const std::filesystem::path& output_dir);
+
+// Writes each cluster (ids of `input`) as DIR/cluster-<k>.txt, replacing what DIR held.
+void WriteClusterFiles(const MapperInput& input, const std::vector<std::vector<image_t>>& clusters,
+                       const std::filesystem::path& dir);
 
 // Sets every point's colour to the mean colour of its observations in the images.
 // Images that cannot be read are skipped with a warning.

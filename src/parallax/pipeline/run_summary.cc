@@ -44,6 +44,28 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   summary["mapper"] = {{"local_bundle_adjustments", result.summary.num_local_ba},
                        {"global_bundle_adjustments", result.summary.num_global_ba},
                        {"bundle_adjustment_s", result.summary.ba_seconds}};
+  if (result.hierarchical) {
+    const HierarchicalMapperSummary& hierarchical = *result.hierarchical;
+    nlohmann::json clusters = nlohmann::json::array();
+    for (const ClusterReport& cluster : hierarchical.clusters) {
+      nlohmann::json merges = nlohmann::json::array();
+      for (const ModelMergeReport& merge : cluster.merges) {
+        merges.push_back({{"merged", merge.success},
+                          {"shared_images", merge.num_shared_images},
+                          {"shared_points", merge.num_correspondences},
+                          {"agreeing_points", merge.num_inliers}});
+      }
+      clusters.push_back({{"images", cluster.num_images},
+                          {"pairs", cluster.num_pairs},
+                          {"model_sizes", cluster.model_sizes},
+                          {"merges", merges},
+                          {"seconds", cluster.seconds}});
+    }
+    summary["mapper"]["hierarchical"] = {{"clusters", clusters},
+                                         {"clusters_s", hierarchical.cluster_seconds},
+                                         {"merge_s", hierarchical.merge_seconds},
+                                         {"refine_s", hierarchical.refine_seconds}};
+  }
 
   nlohmann::json images = nlohmann::json::array();
   for (const auto& [image_id, name] : result.image_names) {

@@ -33,7 +33,6 @@ struct ClusterReport {
 
 struct HierarchicalMapperSummary {
   std::vector<ClusterReport> clusters;
-  double partition_seconds = 0;
   double cluster_seconds = 0;  // Mapping all clusters (wall clock).
   double merge_seconds = 0;
   double refine_seconds = 0;  // Triangulating all tracks, registering leftovers, global BA.

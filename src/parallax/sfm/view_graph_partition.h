@@ -18,7 +18,7 @@ struct ViewGraphPartitionOptions {
   int max_cluster_images = 250;
   // Images each cluster borrows from every neighbouring cluster, the most strongly linked
   // first, so that neighbours share enough images to be merged.
-  int overlap_images = 25;
+  int overlap_images = 10;
   // A cut leaves at least this share of a cluster's images on each side. Without it the
   // normalised cut would trim weakly linked images off the edge one at a time.
   double min_split_fraction = 0.25;
