@@ -3,7 +3,6 @@
 
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
-#include "parallax/math/random.h"
 #include "parallax/pipeline/reconstruction_pipeline.h"
 #include "parallax/render/synthetic_scene.h"
 #include "parallax/report/evaluation.h"
@@ -31,7 +30,6 @@ int RunDemo(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    SetPRNGSeed(scene.seed);
     const std::filesystem::path output(output_dir);
     const std::filesystem::path scene_dir = output / "scene";
     Timer total_timer;
@@ -43,6 +41,8 @@ int RunDemo(int argc, char** argv) {
     ReconstructionPipelineOptions options;
     options.extraction.camera.intrinsics_path = scene_dir / "K.txt";
     options.extraction.camera.single_camera = true;
+    options.matching.geometry.ransac.random_seed = scene.seed;
+    options.mapping.mapper.abs_pose.ransac.random_seed = scene.seed;
     const ReconstructionPipelineResult result =
         RunReconstructionPipeline(options, scene_dir, output / "reconstruction");
     if (!result.Success()) {

@@ -3,7 +3,6 @@
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/cli/mapper_options_cli.h"
-#include "parallax/math/random.h"
 #include "parallax/pipeline/run_summary.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -30,8 +29,7 @@ int RunMapper(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    SetPRNGSeed(seed);
-    options.hierarchical.random_seed = seed;
+    options.mapper.abs_pose.ransac.random_seed = seed;
     if (!options.cluster_file.empty() && options.mapper_type == MapperType::kHierarchical) {
       throw InputError("--cluster maps one cluster incrementally; it cannot be combined with "
                        "--mapper hierarchical");

@@ -18,7 +18,7 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option("--abs-pose-min-inliers", mapper.abs_pose_min_num_inliers,
                  "PnP inliers an image needs to be registered")
       ->capture_default_str();
-  app.add_option("--abs-pose-max-error", mapper.abs_pose.max_error_px,
+  app.add_option("--abs-pose-max-error", mapper.abs_pose.ransac.max_error,
                  "PnP RANSAC threshold, pixels")
       ->capture_default_str();
   app.add_option("--filter-max-error", mapper.filter.max_reproj_error_px,

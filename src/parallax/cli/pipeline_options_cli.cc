@@ -128,7 +128,7 @@ void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) 
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--no-cross-check", no_cross_check_, "Keep matches that are not mutual");
-  app.add_option("--max-error", options->geometry.max_error_px,
+  app.add_option("--max-error", options->geometry.ransac.max_error,
                  "Geometric verification RANSAC threshold, pixels")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

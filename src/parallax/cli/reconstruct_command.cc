@@ -4,7 +4,6 @@
 #include "parallax/cli/commands.h"
 #include "parallax/cli/mapper_options_cli.h"
 #include "parallax/cli/pipeline_options_cli.h"
-#include "parallax/math/random.h"
 #include "parallax/pipeline/reconstruction_pipeline.h"
 #include "parallax/report/html_report.h"
 
@@ -38,8 +37,8 @@ int RunReconstruct(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    SetPRNGSeed(seed);
-    options.mapping.hierarchical.random_seed = seed;
+    options.matching.geometry.ransac.random_seed = seed;
+    options.mapping.mapper.abs_pose.ransac.random_seed = seed;
     options.mapping.hierarchical.num_threads = num_threads;
     extraction_flags.Apply(&options.extraction);
     matching_flags.Apply(&options.matching);

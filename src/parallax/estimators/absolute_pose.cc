@@ -14,10 +14,7 @@
 namespace parallax {
 
 void AbsolutePoseEstimationOptions::Check() const {
-  PARALLAX_CHECK_GT(max_error_px, 0.0);
-  PARALLAX_CHECK(confidence > 0.0 && confidence < 1.0);
-  PARALLAX_CHECK_GT(max_num_trials, 0);
-  PARALLAX_CHECK(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0);
+  ransac.Check();
 }
 
 void AbsolutePoseRefinementOptions::Check() const {
@@ -53,11 +50,8 @@ AbsolutePoseReport EstimateAbsolutePose(const Camera& camera,
   // Three points give up to four poses and no way to choose.
   if (normalized_points.size() < static_cast<size_t>(EPnPEstimator::kMinNumSamples)) return report;
 
-  RansacOptions ransac_options;
-  ransac_options.max_error = camera.CamFromImgThreshold(options.max_error_px);
-  ransac_options.confidence = options.confidence;
-  ransac_options.max_num_trials = options.max_num_trials;
-  ransac_options.min_inlier_ratio = options.min_inlier_ratio;
+  RansacOptions ransac_options = options.ransac;
+  ransac_options.max_error = camera.CamFromImgThreshold(options.ransac.max_error);
   if (!(ransac_options.max_error > 0) || !std::isfinite(ransac_options.max_error)) return report;
   const LoRansac<P3PEstimator, EPnPEstimator> ransac(ransac_options);
   const RansacReport<Rigid3d> ransac_report = ransac.Estimate(normalized_points, world_points);

@@ -10,10 +10,16 @@
 namespace parallax {
 
 struct AbsolutePoseEstimationOptions {
-  double max_error_px = 12.0;  // RANSAC inlier threshold on reprojection error, pixels.
-  double confidence = 0.99999;
-  int max_num_trials = 10000;
-  double min_inlier_ratio = 0.1;
+  // P3P/EPnP LO-RANSAC; max_error is the reprojection error in pixels (converted to the
+  // camera's normalised plane). The mapper derives one seed per image from this one.
+  RansacOptions ransac = [] {
+    RansacOptions options;
+    options.max_error = 12.0;
+    options.confidence = 0.99999;
+    options.max_num_trials = 10000;
+    options.min_inlier_ratio = 0.1;
+    return options;
+  }();
   void Check() const;
 };
 

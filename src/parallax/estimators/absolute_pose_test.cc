@@ -135,7 +135,7 @@ TEST(EstimateAbsolutePose, NoiseAndFortyPercentOutliers) {
       for (int trial = 0; trial < 5; ++trial) {
         const Scene scene = RandomScene(MakeCamera(model_id), 500, 0.5, 0.4);
         AbsolutePoseEstimationOptions options;
-        options.max_error_px = max_error_px;
+        options.ransac.max_error = max_error_px;
         const AbsolutePoseReport report =
             EstimateAbsolutePose(scene.camera, scene.points2D, scene.points3D, options);
         ASSERT_TRUE(report.success);
@@ -256,7 +256,7 @@ TEST(EstimateAbsolutePose, DegenerateInputFailsWithoutCrash) {
   scene.points3D.pop_back();
   EXPECT_THROW(EstimateAbsolutePose(camera, scene.points2D, scene.points3D, options), CheckError);
   AbsolutePoseEstimationOptions bad_options;
-  bad_options.max_error_px = -1;
+  bad_options.ransac.max_error = -1;
   EXPECT_THROW(EstimateAbsolutePose(camera, {}, {}, bad_options), CheckError);
 }
 

@@ -39,18 +39,20 @@ struct Sim3dEstimator {
 
 }  // namespace
 
-Sim3dRansacReport EstimateSim3dRansac(const std::vector<Eigen::Vector3d>& src,
-                                      const std::vector<Eigen::Vector3d>& dst, double max_error,
-                                      int max_num_trials) {
-  PARALLAX_CHECK_EQ(src.size(), dst.size());
-  PARALLAX_CHECK_GT(max_num_trials, 0);
-  Sim3dRansacReport report;
-
+RansacOptions Sim3dRansacOptions(double max_error) {
   RansacOptions options;
   options.max_error = max_error;
-  options.max_num_trials = max_num_trials;
+  options.max_num_trials = 2000;
   options.confidence = 0.9999;
   options.min_inlier_ratio = 0.1;
+  return options;
+}
+
+Sim3dRansacReport EstimateSim3dRansac(const std::vector<Eigen::Vector3d>& src,
+                                      const std::vector<Eigen::Vector3d>& dst,
+                                      const RansacOptions& options) {
+  PARALLAX_CHECK_EQ(src.size(), dst.size());
+  Sim3dRansacReport report;
   const LoRansac<Sim3dEstimator> ransac(options);
   const RansacReport<Sim3d> ransac_report = ransac.Estimate(src, dst);
   if (!ransac_report.success) return report;
@@ -66,7 +68,7 @@ Sim3dRansacReport EstimateSim3dRansac(const std::vector<Eigen::Vector3d>& src,
   }
   const Sim3dEstimator estimator;
   std::vector<double> squared_residuals;
-  const double max_squared_error = max_error * max_error;
+  const double max_squared_error = options.max_error * options.max_error;
   auto count_inliers = [&](const Sim3d& dst_from_src, std::vector<char>* inlier_mask) {
     estimator.Residuals(src, dst, dst_from_src, &squared_residuals);
     inlier_mask->resize(src.size());

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "parallax/geometry/sim3.h"
+#include "parallax/optim/ransac.h"
 
 namespace parallax {
 
@@ -14,11 +15,15 @@ struct Sim3dRansacReport {
   std::vector<char> inlier_mask;
 };
 
+// The RANSAC options of EstimateSim3dRansac: inliers within `max_error` (dst units), up to
+// 2,000 trials, confidence 0.9999, inlier ratios down to 0.1.
+RansacOptions Sim3dRansacOptions(double max_error);
+
 // Robust similarity dst = s R src + t: Umeyama on 3-point samples inside LO-RANSAC, refit on
-// all inliers. `max_error` is the inlier distance in dst units. One bad correspondence (a
-// badly placed camera) cannot skew the result.
+// all inliers. `options.max_error` is the inlier distance in dst units. One bad
+// correspondence (a badly placed camera) cannot skew the result.
 Sim3dRansacReport EstimateSim3dRansac(const std::vector<Eigen::Vector3d>& src,
-                                      const std::vector<Eigen::Vector3d>& dst, double max_error,
-                                      int max_num_trials = 2000);
+                                      const std::vector<Eigen::Vector3d>& dst,
+                                      const RansacOptions& options);
 
 }  // namespace parallax

@@ -30,7 +30,7 @@ TEST(EstimateSim3dRansac, ExactCorrespondences) {
     src.push_back(RandomPoint(5));
     dst.push_back(truth * src.back());
   }
-  const Sim3dRansacReport report = EstimateSim3dRansac(src, dst, 0.01);
+  const Sim3dRansacReport report = EstimateSim3dRansac(src, dst, Sim3dRansacOptions(0.01));
   ASSERT_TRUE(report.success);
   EXPECT_EQ(report.num_inliers, 20u);
   EXPECT_NEAR(report.dst_from_src.scale, truth.scale, 1e-8 * truth.scale);
@@ -48,7 +48,7 @@ TEST(EstimateSim3dRansac, OneWildlyWrongCorrespondenceAmongTwenty) {
     }
     const int bad = trial % 20;
     dst[bad] += Eigen::Vector3d(1000, -500, 300);  // A camera placed far off.
-    const Sim3dRansacReport report = EstimateSim3dRansac(src, dst, 0.05);
+    const Sim3dRansacReport report = EstimateSim3dRansac(src, dst, Sim3dRansacOptions(0.05));
     ASSERT_TRUE(report.success);
     EXPECT_EQ(report.num_inliers, 19u);
     ASSERT_EQ(report.inlier_mask.size(), 20u);
@@ -63,8 +63,8 @@ TEST(EstimateSim3dRansac, FailsGracefullyOnDegenerateInput) {
   const Sim3d truth = RandomSim3d();
   std::vector<Eigen::Vector3d> src = {RandomPoint(1), RandomPoint(1)};
   std::vector<Eigen::Vector3d> dst = {truth * src[0], truth * src[1]};
-  EXPECT_FALSE(EstimateSim3dRansac(src, dst, 0.1).success);
-  EXPECT_FALSE(EstimateSim3dRansac({}, {}, 0.1).success);
+  EXPECT_FALSE(EstimateSim3dRansac(src, dst, Sim3dRansacOptions(0.1)).success);
+  EXPECT_FALSE(EstimateSim3dRansac({}, {}, Sim3dRansacOptions(0.1)).success);
 
   // Collinear points.
   src.clear();
@@ -73,7 +73,7 @@ TEST(EstimateSim3dRansac, FailsGracefullyOnDegenerateInput) {
     src.push_back(Eigen::Vector3d(i, 2 * i, -i));
     dst.push_back(truth * src.back());
   }
-  EXPECT_FALSE(EstimateSim3dRansac(src, dst, 0.1).success);
+  EXPECT_FALSE(EstimateSim3dRansac(src, dst, Sim3dRansacOptions(0.1)).success);
 
   // NaN entries are outliers; the rest still determine the similarity.
   src.clear();
@@ -84,7 +84,7 @@ TEST(EstimateSim3dRansac, FailsGracefullyOnDegenerateInput) {
   }
   src[2].x() = std::numeric_limits<double>::quiet_NaN();
   dst[5].z() = std::numeric_limits<double>::infinity();
-  const Sim3dRansacReport report = EstimateSim3dRansac(src, dst, 0.01);
+  const Sim3dRansacReport report = EstimateSim3dRansac(src, dst, Sim3dRansacOptions(0.01));
   ASSERT_TRUE(report.success);
   EXPECT_EQ(report.num_inliers, 13u);
   EXPECT_NEAR(report.dst_from_src.scale, truth.scale, 1e-8 * truth.scale);

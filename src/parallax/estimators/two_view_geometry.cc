@@ -9,6 +9,7 @@
 #include "parallax/estimators/solvers/essential_matrix.h"
 #include "parallax/estimators/solvers/fundamental_matrix.h"
 #include "parallax/estimators/solvers/homography_matrix.h"
+#include "parallax/estimators/two_view_significance.h"
 #include "parallax/geometry/epipolar.h"
 #include "parallax/geometry/essential_matrix.h"
 #include "parallax/geometry/triangulation.h"
@@ -52,141 +53,16 @@ struct TranslationEstimator {
   }
 };
 
-// Largest numbers of models one minimal sample yields: the multiplicity of the a-contrario
-// test below.
-constexpr int kMaxNumEssentialModels = 10;
-constexpr int kMaxNumFundamentalModels = 3;
-constexpr int kMaxNumHomographyModels = 1;
-// Re-paired matches evaluated to estimate the chance that an unrelated match is an inlier.
-constexpr size_t kMaxNumChancePairs = 4096;
+// The RANSAC streams of one pair: each estimation draws from its own seed.
+enum RansacStream : uint64_t { kEssentialStream = 1, kFundamentalStream, kHomographyStream, kWatermarkStream };
 
-// log10 of the binomial tail P[X >= k], X ~ Binomial(n, p).
-double Log10BinomialTail(size_t n, size_t k, double p) {
-  if (k == 0) return 0.0;
-  if (k > n || p <= 0.0) return -std::numeric_limits<double>::infinity();
-  if (p >= 1.0) return 0.0;
-  const double log_p = std::log(p), log_q = std::log1p(-p);
-  const double lgamma_n = std::lgamma(static_cast<double>(n) + 1.0);
-  double max_term = -std::numeric_limits<double>::infinity();
-  double sum = 0.0;  // Of exp(term - max_term).
-  for (size_t j = k; j <= n; ++j) {
-    const double jd = static_cast<double>(j), rest = static_cast<double>(n - j);
-    const double term =
-        lgamma_n - std::lgamma(jd + 1.0) - std::lgamma(rest + 1.0) + jd * log_p + rest * log_q;
-    if (term > max_term) {
-      sum = sum * std::exp(max_term - term) + 1.0;
-      max_term = term;
-    } else {
-      sum += std::exp(term - max_term);
-      // Past the mode the terms fall geometrically: the rest no longer counts.
-      if (term < max_term - 40.0) break;
-    }
-  }
-  return (max_term + std::log(sum)) / std::log(10.0);
-}
-
-// The a-contrario number of false alarms of a model with `num_inliers` of the n matches
-// (Moisan & Stival, "A probabilistic criterion to detect rigid point matches between two
-// images and estimate the fundamental matrix", IJCV 2004): the expected number of models,
-// among the up to models_per_sample * C(n, s) that minimal samples of s matches yield, that
-// would explain as many matches if these were chance pairings,
-//   NFA = models_per_sample * C(n, s) * P[Binomial(n - s, p) >= num_inliers - s].
-// p, the chance that an unrelated match is an inlier, is measured on the matched keypoints
-// themselves re-paired (x1_i with x2_j, i != j), so it reflects where keypoints lie in these
-// images (often a small part of them) rather than a uniform spread.
-template <typename Estimator>
-double Log10NumFalseAlarms(const Estimator& estimator, const std::vector<Eigen::Vector2d>& points1,
-                           const std::vector<Eigen::Vector2d>& points2,
-                           const Eigen::Matrix3d& model, double max_error, size_t num_inliers,
-                           int models_per_sample) {
-  const size_t n = points1.size();
-  constexpr size_t s = Estimator::kMinNumSamples;
-  if (num_inliers <= s || n <= s) return std::numeric_limits<double>::infinity();
-  std::vector<Eigen::Vector2d> chance1, chance2;
-  if (n * (n - 1) <= kMaxNumChancePairs) {
-    for (size_t i = 0; i < n; ++i) {
-      for (size_t j = 0; j < n; ++j) {
-        if (i == j) continue;
-        chance1.push_back(points1[i]);
-        chance2.push_back(points2[j]);
-      }
-    }
-  } else {
-    for (size_t pair = 0; pair < kMaxNumChancePairs; ++pair) {
-      const auto i = static_cast<size_t>(RandomUniformInteger(0, static_cast<int64_t>(n) - 1));
-      auto j = static_cast<size_t>(RandomUniformInteger(0, static_cast<int64_t>(n) - 2));
-      if (j >= i) ++j;
-      chance1.push_back(points1[i]);
-      chance2.push_back(points2[j]);
-    }
-  }
-  std::vector<double> squared_residuals;
-  estimator.Residuals(chance1, chance2, model, &squared_residuals);
-  const double max_squared_error = max_error * max_error;
-  size_t num_chance_inliers = 0;
-  for (const double residual : squared_residuals)
-    num_chance_inliers += residual <= max_squared_error;
-  // One more inlier than seen: never p = 0 from a finite sample.
-  const double p = static_cast<double>(num_chance_inliers + 1) /
-                   static_cast<double>(squared_residuals.size() + 1);
-  const double log10_num_samples =
-      (std::lgamma(static_cast<double>(n) + 1.0) - std::lgamma(static_cast<double>(s) + 1.0) -
-       std::lgamma(static_cast<double>(n - s) + 1.0)) /
-      std::log(10.0);
-  return std::log10(static_cast<double>(models_per_sample)) + log10_num_samples +
-         Log10BinomialTail(n - s, num_inliers - s, p);
-}
-
-RansacOptions MakeRansacOptions(const TwoViewGeometryOptions& options, double max_error) {
-  RansacOptions ransac_options;
+// The pair's RANSAC options for one estimation: `max_error` in that model's unit.
+RansacOptions StreamRansacOptions(const TwoViewGeometryOptions& options, double max_error,
+                                  RansacStream stream) {
+  RansacOptions ransac_options = options.ransac;
   ransac_options.max_error = max_error;
-  ransac_options.confidence = options.confidence;
-  ransac_options.max_num_trials = options.max_num_trials;
-  ransac_options.min_inlier_ratio = options.min_inlier_ratio;
+  ransac_options.random_seed = DeriveSeed(options.ransac.random_seed, stream);
   return ransac_options;
-}
-
-// True when the points spread less than `tolerance` across their principal line (or all
-// coincide): no two-view model is determined by them.
-bool AreNearlyCollinear(const std::vector<Eigen::Vector2d>& points, const std::vector<char>& mask,
-                        double tolerance) {
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  size_t count = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (!mask[i]) continue;
-    mean += points[i];
-    ++count;
-  }
-  if (count < 3) return true;
-  mean /= static_cast<double>(count);
-  Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (!mask[i]) continue;
-    const Eigen::Vector2d centered = points[i] - mean;
-    covariance += centered * centered.transpose();
-  }
-  covariance /= static_cast<double>(count);
-  // Smallest eigenvalue of the symmetric 2x2 covariance in closed form.
-  const double half_trace = 0.5 * covariance.trace();
-  const double half_difference = 0.5 * (covariance(0, 0) - covariance(1, 1));
-  const double min_variance = half_trace - std::sqrt(half_difference * half_difference +
-                                                     covariance(0, 1) * covariance(0, 1));
-  return !(min_variance > tolerance * tolerance);
-}
-
-// The smaller of the numbers of distinct keypoints of image 1 and of image 2 among the inliers.
-size_t CountDistinctKeypoints(const FeatureMatches& matches, const std::vector<char>& mask) {
-  std::vector<point2D_t> indices1, indices2;
-  for (size_t i = 0; i < matches.size(); ++i) {
-    if (!mask[i]) continue;
-    indices1.push_back(matches[i].point2D_idx1);
-    indices2.push_back(matches[i].point2D_idx2);
-  }
-  const auto count_distinct = [](std::vector<point2D_t>* indices) {
-    std::sort(indices->begin(), indices->end());
-    return static_cast<size_t>(std::unique(indices->begin(), indices->end()) - indices->begin());
-  };
-  return std::min(count_distinct(&indices1), count_distinct(&indices2));
 }
 
 // COLMAP's watermark test: most inliers lie in the border strips of both images and move by
@@ -213,7 +89,8 @@ bool DetectWatermark(const Camera& camera1, const std::vector<Eigen::Vector2d>& 
   }
   const double min_num_watermark_inliers = options.watermark_min_inlier_ratio * num_inliers;
   if (border_points1.empty() || border_points1.size() < min_num_watermark_inliers) return false;
-  const LoRansac<TranslationEstimator> ransac(MakeRansacOptions(options, options.max_error_px));
+  const LoRansac<TranslationEstimator> ransac(
+      StreamRansacOptions(options, options.ransac.max_error, kWatermarkStream));
   const auto report = ransac.Estimate(border_points1, border_points2);
   return report.success && report.num_inliers >= min_num_watermark_inliers;
 }
@@ -325,14 +202,10 @@ bool PoseFromCalibratedHomography(const Eigen::Matrix3d& H_calibrated,
 
 void TwoViewGeometryOptions::Check() const {
   PARALLAX_CHECK_GE(min_num_inliers, 0);
-  PARALLAX_CHECK_GT(max_error_px, 0.0);
-  PARALLAX_CHECK(confidence > 0.0 && confidence < 1.0);
-  PARALLAX_CHECK_GT(max_num_trials, 0);
-  PARALLAX_CHECK(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0);
+  ransac.Check();
   PARALLAX_CHECK(min_E_F_inlier_ratio >= 0.0 && min_E_F_inlier_ratio <= 1.0);
   PARALLAX_CHECK(max_H_inlier_ratio >= 0.0 && max_H_inlier_ratio <= 1.0);
   PARALLAX_CHECK(watermark_min_inlier_ratio >= 0.0 && watermark_min_inlier_ratio <= 1.0);
-  PARALLAX_CHECK_GT(min_inlier_ratio_trials_multiplier, 0.0);
   PARALLAX_CHECK_GT(max_num_false_alarms, 0.0);
 }
 
@@ -366,23 +239,18 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
   if (valid_matches.size() < min_num_inliers) return geometry;
 
   const size_t num_valid = valid_matches.size();
+  const double max_error_px = options.ransac.max_error;
 
   // Trial budgets. A pair needs min_num_inliers inliers, and F and H only change the outcome
   // when they explain a set fraction of the other model's inliers, so each RANSAC need only
-  // search for models with at least that many inliers (`num_inliers_sought`). The chance
-  // matches of a non-overlapping pair are few (15-35 on templeRing), which makes this a few
-  // dozen to a few hundred trials instead of the cap.
-  const auto bounded_options = [&](double max_error, size_t sample_size,
-                                   double num_inliers_sought) {
-    RansacOptions ransac_options = MakeRansacOptions(options, max_error);
-    const double ratio = std::clamp(num_inliers_sought / static_cast<double>(num_valid),
-                                    options.min_inlier_ratio, 1.0);
-    const size_t bound = ComputeNumRansacTrials(
-        static_cast<size_t>(std::ceil(ratio * static_cast<double>(num_valid))), num_valid,
-        sample_size, options.confidence, options.min_inlier_ratio_trials_multiplier);
-    ransac_options.max_num_trials =
-        static_cast<int>(std::clamp<size_t>(bound, 1, static_cast<size_t>(options.max_num_trials)));
-    ransac_options.min_inlier_ratio = 0.0;  // Bounded here.
+  // search for models with at least that many inliers (`num_inliers_sought`), which RANSAC
+  // turns into its bound on trials. The chance matches of a non-overlapping pair are few
+  // (15-35 on templeRing), which makes this a few dozen to a few hundred trials instead of
+  // the cap.
+  const auto bounded_options = [&](double max_error, RansacStream stream, double num_inliers_sought) {
+    RansacOptions ransac_options = StreamRansacOptions(options, max_error, stream);
+    ransac_options.min_inlier_ratio = std::clamp(
+        num_inliers_sought / static_cast<double>(num_valid), options.ransac.min_inlier_ratio, 1.0);
     return ransac_options;
   };
 
@@ -401,11 +269,10 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
       normalized1[i] = camera1.CamFromImg(matched1[i]);
       normalized2[i] = camera2.CamFromImg(matched2[i]);
     }
-    E_max_error = 0.5 * (camera1.CamFromImgThreshold(options.max_error_px) +
-                         camera2.CamFromImgThreshold(options.max_error_px));
+    E_max_error = 0.5 * (camera1.CamFromImgThreshold(max_error_px) +
+                         camera2.CamFromImgThreshold(max_error_px));
     const LoRansac<EssentialMatrixFivePointEstimator, EssentialMatrixEightPointEstimator> E_ransac(
-        bounded_options(E_max_error, EssentialMatrixFivePointEstimator::kMinNumSamples,
-                        static_cast<double>(min_num_inliers)));
+        bounded_options(E_max_error, kEssentialStream, static_cast<double>(min_num_inliers)));
     E_report = E_ransac.Estimate(normalized1, normalized2);
   }
   const size_t E_num_inliers = E_report.success ? E_report.num_inliers : 0;
@@ -417,9 +284,7 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
       E_found ? static_cast<double>(E_num_inliers) / std::max(options.min_E_F_inlier_ratio, 1e-9)
               : static_cast<double>(min_num_inliers);
   const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>
-      F_ransac(bounded_options(options.max_error_px,
-                               FundamentalMatrixSevenPointEstimator::kMinNumSamples,
-                               F_num_inliers_sought));
+      F_ransac(bounded_options(max_error_px, kFundamentalStream, F_num_inliers_sought));
   const auto F_report = F_ransac.Estimate(matched1, matched2);
   const size_t F_num_inliers = F_report.success ? F_report.num_inliers : 0;
 
@@ -436,8 +301,8 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
       calibrated_branch     ? options.max_H_inlier_ratio * static_cast<double>(E_num_inliers)
       : uncalibrated_branch ? options.max_H_inlier_ratio * static_cast<double>(F_num_inliers)
                             : static_cast<double>(min_num_inliers);
-  const LoRansac<HomographyMatrixEstimator> H_ransac(bounded_options(
-      options.max_error_px, HomographyMatrixEstimator::kMinNumSamples, H_num_inliers_sought));
+  const LoRansac<HomographyMatrixEstimator> H_ransac(
+      bounded_options(max_error_px, kHomographyStream, H_num_inliers_sought));
   const auto H_report = H_ransac.Estimate(matched1, matched2);
   const size_t H_num_inliers = H_report.success ? H_report.num_inliers : 0;
 
@@ -481,8 +346,8 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
 
   // Matches along one line (or on one point) satisfy every model of the family, and one
   // keypoint matched many times (no cross-check) is one observation, not many: refuse both.
-  if (AreNearlyCollinear(matched1, *inlier_mask, options.max_error_px) ||
-      AreNearlyCollinear(matched2, *inlier_mask, options.max_error_px) ||
+  if (AreNearlyCollinear(matched1, *inlier_mask, max_error_px) ||
+      AreNearlyCollinear(matched2, *inlier_mask, max_error_px) ||
       CountDistinctKeypoints(valid_matches, *inlier_mask) < min_num_inliers) {
     PARALLAX_LOG(Debug) << "Two-view inliers are collinear or repeated: degenerate pair";
     geometry.config = TwoViewGeometry::kDegenerate;
@@ -491,19 +356,20 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
 
   // Chance matches: RANSAC always finds some model that explains a few of them, more the more
   // matches there are. Keep the pair only when so many inliers would be unexpected.
+  const uint64_t chance_seed = DeriveSeed(options.ransac.random_seed, 0);
   double log10_num_false_alarms = 0.0;
   if (chosen == &E_report) {
     log10_num_false_alarms =
         Log10NumFalseAlarms(EssentialMatrixFivePointEstimator(), normalized1, normalized2,
-                            E_report.model, E_max_error, num_inliers, kMaxNumEssentialModels);
+                            E_report.model, E_max_error, num_inliers, chance_seed);
   } else if (chosen == &F_report) {
     log10_num_false_alarms = Log10NumFalseAlarms(FundamentalMatrixSevenPointEstimator(), matched1,
-                                                 matched2, F_report.model, options.max_error_px,
-                                                 num_inliers, kMaxNumFundamentalModels);
+                                                 matched2, F_report.model, max_error_px,
+                                                 num_inliers, chance_seed);
   } else {
-    log10_num_false_alarms =
-        Log10NumFalseAlarms(HomographyMatrixEstimator(), matched1, matched2, H_report.model,
-                            options.max_error_px, num_inliers, kMaxNumHomographyModels);
+    log10_num_false_alarms = Log10NumFalseAlarms(HomographyMatrixEstimator(), matched1, matched2,
+                                                 H_report.model, max_error_px, num_inliers,
+                                                 chance_seed);
   }
   if (log10_num_false_alarms > std::log10(options.max_num_false_alarms)) {
     PARALLAX_LOG(Debug) << "Two-view inliers (" << num_inliers << " of " << num_valid
@@ -550,7 +416,7 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
       const Eigen::Matrix3d F_pose =
           FundamentalFromEssential(EssentialFromPose(geometry.cam2_from_cam1),
                                    camera1.CalibrationMatrix(), camera2.CalibrationMatrix());
-      const double max_squared_error = options.max_error_px * options.max_error_px;
+      const double max_squared_error = max_error_px * max_error_px;
       for (size_t i = 0; i < refined_mask.size(); ++i) {
         if (!refined_mask[i] && (*inlier_mask)[i] &&
             ComputeSquaredSampsonError(matched1[i], matched2[i], F_pose) <= max_squared_error) {

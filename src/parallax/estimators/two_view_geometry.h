@@ -11,16 +11,22 @@
 namespace parallax {
 
 struct TwoViewGeometryOptions {
-  int min_num_inliers = 15;           // Fewer inliers: the pair is degenerate.
-  double max_error_px = 4.0;          // RANSAC threshold in pixels (F, H; E scaled by focal).
-  double confidence = 0.9999;
-  int max_num_trials = 10000;
-  // Lowest inlier ratio RANSAC searches for (bounds its trials; COLMAP's 0.25). The bound is
-  // raised further to the fewest inliers that could change the outcome (min_num_inliers, and
-  // the E/F and H/F ratios below), so chance matches are rejected in few trials.
-  double min_inlier_ratio = 0.25;
-  // Multiplier on the number of trials that bound gives (the adaptive stop keeps RANSAC's 3).
-  double min_inlier_ratio_trials_multiplier = 1.0;
+  int min_num_inliers = 15;  // Fewer inliers: the pair is degenerate.
+  // The RANSAC of E, F, H and the watermark test. max_error is in pixels (F, H; E's is
+  // scaled by the focal lengths). min_inlier_ratio is COLMAP's 0.25 with a multiplier of 1 on
+  // its bound; each model's search is raised further to the fewest inliers that could change
+  // the outcome (min_num_inliers, and the E/F and H/F ratios below), so chance matches are
+  // rejected in few trials. The seed is the pair's: matching derives it from --seed and the
+  // pair, and each model's RANSAC derives its own from it.
+  RansacOptions ransac = [] {
+    RansacOptions options;
+    options.max_error = 4.0;
+    options.confidence = 0.9999;
+    options.max_num_trials = 10000;
+    options.min_inlier_ratio = 0.25;
+    options.min_inlier_ratio_trials_multiplier = 1.0;
+    return options;
+  }();
   // Significance: a pair is kept only when at most this many models would be expected to
   // explain as many of its matches by chance (a-contrario number of false alarms; Moisan &
   // Stival 2004). Without it, random matches pass once a pair has ~100 of them.

@@ -124,7 +124,10 @@ void ExpectGoodInliers(const Scene& scene, const TwoViewGeometry& geometry) {
             << counts.outliers_kept << "/" << scene.is_inlier.size() - counts.num_true_inliers
             << " outliers\n";
   EXPECT_GE(counts.inliers_kept, 0.95 * counts.num_true_inliers);
-  EXPECT_LE(counts.outliers_kept, 0.01 * geometry.inlier_matches.size());
+  // About 1 % of uniform outliers fall within 1.5 px of their epipolar line and cannot be
+  // rejected (see NoisyOptions); the count is Poisson, so allow two and a half times that.
+  const size_t num_outliers = scene.is_inlier.size() - counts.num_true_inliers;
+  EXPECT_LE(counts.outliers_kept, 0.025 * num_outliers);
 }
 
 double TranslationAngleDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -136,7 +139,7 @@ double TranslationAngleDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& 
 // about 1 % of uniform outliers are.
 TwoViewGeometryOptions NoisyOptions() {
   TwoViewGeometryOptions options;
-  options.max_error_px = 1.5;
+  options.ransac.max_error = 1.5;
   return options;
 }
 
@@ -221,7 +224,7 @@ TEST(EstimateTwoViewGeometry, PlanarSceneIsDetected) {
       // plane's matches, F (Sampson error) nearly all plus some outliers, which puts H/F at
       // the 0.8 planar threshold; 2 px keeps ~95 % (see PureRotationIsPanoramic).
       TwoViewGeometryOptions options = NoisyOptions();
-      options.max_error_px = 2.0;
+      options.ransac.max_error = 2.0;
       const TwoViewGeometry geometry = Estimate(scene, options);
       EXPECT_EQ(geometry.config, TwoViewGeometry::kPlanar)
           << "noise " << noise << " calibrated " << calibrated;
@@ -242,7 +245,7 @@ TEST(EstimateTwoViewGeometry, PureRotationIsPanoramic) {
     // A panoramic pair keeps H's inliers, whose transfer error carries the noise of both
     // images (sigma sqrt(2) per axis): 1.5 px would drop ~10 % of them, 2 px drops ~2 %.
     TwoViewGeometryOptions options = NoisyOptions();
-    options.max_error_px = 2.0;
+    options.ransac.max_error = 2.0;
     const TwoViewGeometry geometry = Estimate(scene, options);
     ASSERT_EQ(geometry.config, TwoViewGeometry::kPanoramic) << "noise " << noise;
     ExpectGoodInliers(scene, geometry);
@@ -438,10 +441,10 @@ TEST(EstimateTwoViewGeometry, RejectsBadOptionsAndIndices) {
   SetPRNGSeed(10);
   const Scene scene = CalibratedScene(50, 0.0, 0.0);
   TwoViewGeometryOptions options;
-  options.max_error_px = 0.0;
+  options.ransac.max_error = 0.0;
   EXPECT_THROW(Estimate(scene, options), CheckError);
   options = {};
-  options.confidence = 1.0;
+  options.ransac.confidence = 1.0;
   EXPECT_THROW(Estimate(scene, options), CheckError);
   FeatureMatches matches = scene.matches;
   matches[3].point2D_idx2 = static_cast<point2D_t>(scene.points2.size());

@@ -6,6 +6,17 @@ namespace {
 constexpr uint64_t kDefaultSeed = 0x5eed;
 }
 
+uint64_t DeriveSeed(uint64_t seed, uint64_t stream) {
+  // Two rounds of SplitMix64's finaliser (Steele, Lea & Flood 2014) over seed and stream.
+  const auto mix = [](uint64_t z) {
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  };
+  return mix(mix(seed) ^ stream);
+}
+
 std::mt19937_64& ThreadLocalPRNG() {
   thread_local std::mt19937_64 generator(kDefaultSeed);
   return generator;

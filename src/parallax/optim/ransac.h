@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <random>
 #include <vector>
 
 #include "parallax/math/random.h"
@@ -28,10 +29,14 @@ namespace parallax {
 // trials adapts to the best inlier ratio seen.
 
 struct RansacOptions {
-  // Inlier threshold on the residual (the estimator's unit, not squared).
+  // Inlier threshold on the residual (the estimator's unit, not squared; estimators that
+  // take pixels say so and convert).
   double max_error = 1.0;
-  // Lowest inlier ratio searched for: bounds the number of trials from above.
+  // Lowest inlier ratio searched for: bounds the number of trials from above, to the count
+  // that finds a sample of this ratio with `confidence`, times the multiplier. A caller that
+  // knows how many inliers would change its outcome raises it (two-view verification).
   double min_inlier_ratio = 0.1;
+  double min_inlier_ratio_trials_multiplier = 3.0;
   // Probability of having drawn at least one all-inlier sample when stopping.
   double confidence = 0.9999;
   // Multiplier on the adaptive trial count (>1 to be conservative with non-uniform outliers).
@@ -40,13 +45,18 @@ struct RansacOptions {
   int max_num_trials = 10000;
   // Local optimisation rounds per new best model (0 disables LO).
   int local_optimization_iterations = 10;
+  // Seed of the run's own generator: the same seed and data draw the same samples, whatever
+  // thread runs it. Callers that run many estimations derive one seed per run (DeriveSeed).
+  uint64_t random_seed = 0;
 
   void Check() const {
     PARALLAX_CHECK_GT(max_error, 0.0);
     PARALLAX_CHECK(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0);
+    PARALLAX_CHECK_GT(min_inlier_ratio_trials_multiplier, 0.0);
     PARALLAX_CHECK(confidence > 0.0 && confidence < 1.0);
     PARALLAX_CHECK_GE(dynamic_num_trials_multiplier, 0.0);
     PARALLAX_CHECK_GE(min_num_trials, 0);
+    PARALLAX_CHECK_GT(max_num_trials, 0);
     PARALLAX_CHECK_LE(min_num_trials, max_num_trials);
     PARALLAX_CHECK_GE(local_optimization_iterations, 0);
   }
@@ -108,15 +118,16 @@ class LoRansac {
 
     Score best;
     M_t best_model{};
+    std::mt19937_64 generator(options_.random_seed);
     size_t max_trials = static_cast<size_t>(options_.max_num_trials);
     max_trials = std::min(max_trials, ComputeNumRansacTrials(
         static_cast<size_t>(std::ceil(options_.min_inlier_ratio * num_samples)), num_samples,
-        kSampleSize, options_.confidence, options_.dynamic_num_trials_multiplier));
+        kSampleSize, options_.confidence, options_.min_inlier_ratio_trials_multiplier));
     max_trials = std::max(max_trials, static_cast<size_t>(options_.min_num_trials));
 
     size_t trial = 0;
     for (; trial < max_trials; ++trial) {
-      Shuffle(kSampleSize, &indices);
+      Shuffle(kSampleSize, &indices, &generator);
       for (size_t i = 0; i < kSampleSize; ++i) {
         X_sample[i] = X[indices[i]];
         Y_sample[i] = Y[indices[i]];

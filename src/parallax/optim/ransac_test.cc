@@ -4,6 +4,8 @@
 
 #include <Eigen/Dense>
 
+#include "parallax/math/random.h"
+
 namespace parallax {
 namespace {
 
@@ -62,6 +64,45 @@ TEST(LoRansac, RecoversLineWithHalfOutliers) {
   EXPECT_GE(true_inliers_kept, 195u);
   EXPECT_LE(outliers_kept, 4u);
   EXPECT_LT(report.num_trials, 1000u);
+}
+
+// A line estimator that records the x values of every minimal sample it is given.
+struct RecordingLineEstimator : LineEstimator {
+  std::vector<std::vector<double>>* samples = nullptr;
+  void Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y, std::vector<M_t>* models) const {
+    samples->push_back(X);
+    LineEstimator::Estimate(X, Y, models);
+  }
+};
+
+std::vector<std::vector<double>> SamplesDrawn(uint64_t seed) {
+  std::vector<double> X, Y;
+  for (int i = 0; i < 100; ++i) {
+    X.push_back(i);
+    Y.push_back(i % 3 == 0 ? 1000.0 + i : 2.0 * i + 1.0);  // A third are outliers.
+  }
+  std::vector<std::vector<double>> samples;
+  RecordingLineEstimator estimator;
+  estimator.samples = &samples;
+  RansacOptions options;
+  options.random_seed = seed;
+  options.local_optimization_iterations = 0;
+  options.min_num_trials = 20;
+  const LoRansac<RecordingLineEstimator> ransac(options, estimator);
+  EXPECT_TRUE(ransac.Estimate(X, Y).success);
+  return samples;
+}
+
+TEST(LoRansac, TheSeedAloneDecidesTheSamples) {
+  // The thread's generator plays no part: reseeding it changes nothing.
+  SetPRNGSeed(1);
+  const auto first = SamplesDrawn(42);
+  SetPRNGSeed(2);
+  EXPECT_EQ(SamplesDrawn(42), first);
+  const auto other = SamplesDrawn(43);
+  ASSERT_GE(other.size(), 20u);
+  EXPECT_NE(std::vector<std::vector<double>>(other.begin(), other.begin() + 20),
+            std::vector<std::vector<double>>(first.begin(), first.begin() + 20));
 }
 
 TEST(LoRansac, TooFewPointsFails) {

@@ -222,15 +222,15 @@ FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& option
           // Too few to verify: recorded as degenerate so a resumed run does not retry it.
           job.geometry.config = TwoViewGeometry::kDegenerate;
         } else {
-          // RANSAC draws from the thread's generator: seeding it by pair makes the result
-          // independent of which thread runs the pair; the caller's stream is restored.
-          const std::mt19937_64 saved_prng = ThreadLocalPRNG();
-          SetPRNGSeed(ImagePairToPairId(job.image_id1, job.image_id2));
+          // The pair's seed comes from the run's and the pair's ids: the result does not
+          // depend on which thread verifies the pair, nor in what order.
+          TwoViewGeometryOptions pair_options = options.geometry;
+          pair_options.ransac.random_seed = DeriveSeed(
+              options.geometry.ransac.random_seed, ImagePairToPairId(job.image_id1, job.image_id2));
           job.geometry =
               EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)), features1.points,
                                       cameras.at(camera_of_image.at(job.image_id2)), features2.points,
-                                      job.matches, options.geometry);
-          ThreadLocalPRNG() = saved_prng;
+                                      job.matches, pair_options);
         }
         job.verification_seconds = pair_timer.ElapsedSeconds();
         job.done = true;

@@ -104,7 +104,7 @@ nlohmann::json CurveToJson(const std::vector<AccuracyAtThreshold>& curve) {
 
 void EvaluationOptions::Check() const {
   PARALLAX_CHECK_GT(alignment_max_error_ratio, 0.0);
-  PARALLAX_CHECK_GT(alignment_max_num_trials, 0);
+  alignment_ransac.Check();
   for (double threshold : rotation_thresholds_deg) PARALLAX_CHECK_GT(threshold, 0.0);
   for (double threshold : center_thresholds_ratio) PARALLAX_CHECK_GT(threshold, 0.0);
 }
@@ -170,10 +170,9 @@ EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const Grou
 
   // A similarity needs three centres; with coincident GT centres there is no scale to use.
   if (matched_gt_indices.size() >= 3 && metrics.gt_scene_scale > 0) {
-    const Sim3dRansacReport report =
-        EstimateSim3dRansac(model_centers, gt_centers,
-                            options.alignment_max_error_ratio * metrics.gt_scene_scale,
-                            options.alignment_max_num_trials);
+    RansacOptions ransac_options = options.alignment_ransac;
+    ransac_options.max_error = options.alignment_max_error_ratio * metrics.gt_scene_scale;
+    const Sim3dRansacReport report = EstimateSim3dRansac(model_centers, gt_centers, ransac_options);
     metrics.alignment_success = report.success;
     if (report.success) {
       metrics.gt_from_model = report.dst_from_src;

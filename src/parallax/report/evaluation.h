@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "parallax/estimators/similarity_transform.h"
 #include "parallax/geometry/sim3.h"
 #include "parallax/report/ground_truth.h"
 #include "parallax/scene/reconstruction.h"
@@ -14,8 +15,8 @@ struct EvaluationOptions {
   // Inlier distance of the similarity alignment of camera centres, as a fraction of the GT
   // scene scale (mean distance of the GT centres from their centroid).
   double alignment_max_error_ratio = 0.05;
-  // RANSAC iterations of the alignment.
-  int alignment_max_num_trials = 2000;
+  // The alignment's RANSAC (its max_error is set from the ratio above).
+  RansacOptions alignment_ransac = Sim3dRansacOptions(1.0);
   // Thresholds (degrees) of the rotation accuracy curve.
   std::vector<double> rotation_thresholds_deg = {1.0, 2.0, 5.0};
   // Thresholds (fractions of the GT scene scale) of the relative centre accuracy curve.

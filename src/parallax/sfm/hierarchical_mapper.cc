@@ -57,10 +57,11 @@ std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
   ProgressReporter progress("mapping clusters", total_images);
   ParallelFor(0, clusters.size(), num_workers, [&](size_t index) {
     Timer cluster_timer;
-    SetPRNGSeed(options_.random_seed + index);
     const ImageCluster cluster = MakeImageCluster(input_, clusters[index]);
     const MapperInput part = ClusterMapperInput(input_, cluster, "cluster");
-    IncrementalMapper mapper(cluster_options, part);
+    IncrementalMapperOptions options = cluster_options;
+    options.abs_pose.ransac.random_seed = DeriveSeed(cluster_options.abs_pose.ransac.random_seed, index);
+    IncrementalMapper mapper(options, part);
     mapper.SetProgress(&progress);
     MapperSummary cluster_summary;
     cluster_models[index] = mapper.Reconstruct(&cluster_summary);
@@ -97,7 +98,6 @@ std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
 
   // 3. One model over everything, from the merged poses.
   timer.Restart();
-  SetPRNGSeed(options_.random_seed);
   IncrementalMapper mapper(mapper_options_, input_);
   std::vector<Reconstruction> result =
       merged.NumRegImages() >= 2 ? mapper.Extend(merged, summary) : mapper.Reconstruct(summary);

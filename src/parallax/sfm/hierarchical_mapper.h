@@ -1,6 +1,5 @@
 #pragma once
 
-#include <cstdint>
 #include <vector>
 
 #include "parallax/sfm/image_cluster.h"
@@ -16,9 +15,6 @@ struct HierarchicalMapperOptions {
   // Clusters mapped at once (-1: one per core). Bundle adjustment inside a cluster gets the
   // remaining share of its thread count.
   int num_threads = -1;
-  // Cluster k's mapper draws from a generator seeded with random_seed + k, so the result does
-  // not depend on which thread maps which cluster.
-  uint64_t random_seed = 0;
   void Check() const;
 };
 
@@ -43,6 +39,8 @@ struct HierarchicalMapperSummary {
 // the clusters' models merged by similarities estimated from their shared images, and the
 // merged poses handed to the incremental mapper over the whole input, which triangulates all
 // tracks, registers what no cluster could, and finishes with global bundle adjustment.
+// Cluster k's mapper seeds its RANSAC from the mapper's seed and k, so the result does not
+// depend on which thread maps which cluster.
 class HierarchicalMapper {
  public:
   HierarchicalMapper(const HierarchicalMapperOptions& options,

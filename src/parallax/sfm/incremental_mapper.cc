@@ -7,6 +7,7 @@
 
 #include "parallax/geometry/essential_matrix.h"
 #include "parallax/geometry/triangulation.h"
+#include "parallax/math/random.h"
 #include "parallax/sfm/next_view.h"
 #include "parallax/sfm/tracked_reconstruction.h"
 #include "parallax/util/check.h"
@@ -181,14 +182,18 @@ class IncrementalMapper::ModelBuilder {
       points1.push_back(camera1.CamFromImg(image1.points2D[match.point2D_idx1].xy));
       points2.push_back(camera2.CamFromImg(image2.points2D[match.point2D_idx2].xy));
     }
-    Eigen::Matrix3d E = geometry.E;
-    if (geometry.config != TwoViewGeometry::kCalibrated || E.isZero()) {
-      E = EssentialFromFundamental(geometry.F, camera1.CalibrationMatrix(),
-                                   camera2.CalibrationMatrix());
-    }
-    Rigid3d cam2_from_cam1;
-    if (!E.allFinite() || !PoseFromEssentialMatrix(E, points1, points2, &cam2_from_cam1)) {
-      return false;
+    // Verification stores every accepted pair's relative pose (from E, F or H, whichever
+    // explains the pair); databases without one (COLMAP's before 3.7) get it from E here.
+    Rigid3d cam2_from_cam1 = geometry.cam2_from_cam1;
+    if (cam2_from_cam1.translation.isZero() || !cam2_from_cam1.translation.allFinite()) {
+      Eigen::Matrix3d E = geometry.E;
+      if (geometry.config != TwoViewGeometry::kCalibrated || E.isZero()) {
+        E = EssentialFromFundamental(geometry.F, camera1.CalibrationMatrix(),
+                                     camera2.CalibrationMatrix());
+      }
+      if (!E.allFinite() || !PoseFromEssentialMatrix(E, points1, points2, &cam2_from_cam1)) {
+        return false;
+      }
     }
 
     // Count the matches that triangulate well under this pose.
@@ -207,10 +212,18 @@ class IncrementalMapper::ModelBuilder {
       if (error1 > max_error || error2 > max_error) continue;
       angles.push_back(CalculateTriangulationAngle(Eigen::Vector3d::Zero(), center2, *xyz));
     }
-    if (static_cast<int>(angles.size()) < options_.init_min_num_inliers) return false;
+    if (static_cast<int>(angles.size()) < options_.init_min_num_inliers) {
+      PARALLAX_LOG(Debug) << "mapper: initial pair " << image1.name << " + " << image2.name << ": "
+                          << angles.size() << " of " << points1.size() << " inliers triangulate";
+      return false;
+    }
     std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
     const double median_angle_deg = angles[angles.size() / 2] * 180.0 / M_PI;
-    if (median_angle_deg < min_angle_deg) return false;
+    if (median_angle_deg < min_angle_deg) {
+      PARALLAX_LOG(Debug) << "mapper: initial pair " << image1.name << " + " << image2.name
+                          << ": median angle " << median_angle_deg << " deg, below " << min_angle_deg;
+      return false;
+    }
 
     reconstruction_.GetImage(image_id1).cam_from_world = Rigid3d();
     reconstruction_.GetImage(image_id2).cam_from_world = cam2_from_cam1;
@@ -286,7 +299,13 @@ class IncrementalMapper::ModelBuilder {
                        " (need " + std::to_string(min_inliers) + ")";
       return false;
     }
-    const AbsolutePoseReport pose = EstimateAbsolutePose(camera, points2D, points3D, options_.abs_pose);
+    // One seed per image (and attempt), derived from the mapper's: the same run registers the
+    // same way whatever came before.
+    AbsolutePoseEstimationOptions pose_options = options_.abs_pose;
+    pose_options.ransac.random_seed =
+        DeriveSeed(options_.abs_pose.ransac.random_seed,
+                   (static_cast<uint64_t>(image_id) << 8) | (report->num_registration_trials & 0xff));
+    const AbsolutePoseReport pose = EstimateAbsolutePose(camera, points2D, points3D, pose_options);
     report->num_pnp_inliers = pose.num_inliers;
     const double inlier_ratio = static_cast<double>(pose.num_inliers) / points2D.size();
     if (!pose.success || pose.num_inliers < min_inliers ||

@@ -13,6 +13,7 @@ void ModelMergerOptions::Check() const {
   PARALLAX_CHECK_GE(min_shared_images, 1);
   PARALLAX_CHECK_GE(min_inlier_points, 3);
   PARALLAX_CHECK_GT(max_error_fraction, 0.0);
+  ransac.Check();
 }
 
 namespace {
@@ -95,8 +96,9 @@ ModelMergeReport EstimateMergedFromModel(const ModelMergerOptions& options,
   observations.Correspondences(model, shared_images, &model_points, &merged_points);
   report.num_correspondences = model_points.size();
   if (static_cast<int>(model_points.size()) < options.min_inlier_points) return report;
-  const double max_error = options.max_error_fraction * MedianDistanceFromMedian(merged_points);
-  const Sim3dRansacReport sim3 = EstimateSim3dRansac(model_points, merged_points, max_error);
+  RansacOptions ransac_options = options.ransac;
+  ransac_options.max_error = options.max_error_fraction * MedianDistanceFromMedian(merged_points);
+  const Sim3dRansacReport sim3 = EstimateSim3dRansac(model_points, merged_points, ransac_options);
   report.num_inliers = sim3.num_inliers;
   report.merged_from_model = sim3.dst_from_src;
   report.success = sim3.success && static_cast<int>(sim3.num_inliers) >= options.min_inlier_points;

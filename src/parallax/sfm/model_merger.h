@@ -2,6 +2,7 @@
 
 #include <vector>
 
+#include "parallax/estimators/similarity_transform.h"
 #include "parallax/geometry/sim3.h"
 #include "parallax/scene/reconstruction.h"
 
@@ -15,6 +16,8 @@ struct ModelMergerOptions {
   // Inlier distance of the similarity RANSAC, as a share of the spread of the shared points
   // (their median distance from their median): independent of each model's arbitrary scale.
   double max_error_fraction = 0.01;
+  // The similarity's RANSAC (its max_error is set from the fraction above).
+  RansacOptions ransac = Sim3dRansacOptions(1.0);
   void Check() const;
 };
 

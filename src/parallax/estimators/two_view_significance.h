@@ -1,0 +1,80 @@
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "parallax/estimators/solvers/essential_matrix.h"
+#include "parallax/estimators/solvers/fundamental_matrix.h"
+#include "parallax/estimators/solvers/homography_matrix.h"
+#include "parallax/feature/types.h"
+
+namespace parallax {
+
+// Whether a two-view model found by RANSAC means anything: the a-contrario significance of
+// its inliers, and the degenerate inlier sets (collinear, or one keypoint matched many times)
+// that every model of the family explains.
+
+// Largest numbers of models one minimal sample of each solver yields: the multiplicity of
+// the a-contrario test.
+template <typename Estimator>
+inline constexpr int kMaxModelsPerSample = 1;
+template <>
+inline constexpr int kMaxModelsPerSample<EssentialMatrixFivePointEstimator> = 10;
+template <>
+inline constexpr int kMaxModelsPerSample<FundamentalMatrixSevenPointEstimator> = 3;
+
+// log10 of the binomial tail P[X >= k], X ~ Binomial(n, p).
+double Log10BinomialTail(size_t n, size_t k, double p);
+
+// The matched keypoints re-paired (x1_i with x2_j, i != j): all such pairs when few, else
+// 4,096 drawn from a generator seeded with `seed`.
+void ChancePairs(const std::vector<Eigen::Vector2d>& points1, const std::vector<Eigen::Vector2d>& points2,
+                 uint64_t seed, std::vector<Eigen::Vector2d>* chance1, std::vector<Eigen::Vector2d>* chance2);
+
+// log10 of the number of false alarms of a model with `num_inliers` of n matches, from the
+// chance p that an unrelated match is an inlier (see Log10NumFalseAlarms).
+double Log10NumFalseAlarmsFromChance(size_t n, size_t sample_size, size_t num_inliers, double p,
+                                     int models_per_sample);
+
+// The a-contrario number of false alarms of a model with `num_inliers` of the n matches
+// (Moisan & Stival, "A probabilistic criterion to detect rigid point matches between two
+// images and estimate the fundamental matrix", IJCV 2004): the expected number of models,
+// among the up to models_per_sample * C(n, s) that minimal samples of s matches yield, that
+// would explain as many matches if these were chance pairings,
+//   NFA = models_per_sample * C(n, s) * P[Binomial(n - s, p) >= num_inliers - s].
+// p, the chance that an unrelated match is an inlier, is measured on the matched keypoints
+// themselves re-paired (ChancePairs), so it reflects where keypoints lie in these images
+// (often a small part of them) rather than a uniform spread. Returns log10(NFA).
+template <typename Estimator>
+double Log10NumFalseAlarms(const Estimator& estimator, const std::vector<Eigen::Vector2d>& points1,
+                           const std::vector<Eigen::Vector2d>& points2, const Eigen::Matrix3d& model,
+                           double max_error, size_t num_inliers, uint64_t seed) {
+  const size_t n = points1.size();
+  constexpr size_t s = Estimator::kMinNumSamples;
+  if (num_inliers <= s || n <= s) return std::numeric_limits<double>::infinity();
+  std::vector<Eigen::Vector2d> chance1, chance2;
+  ChancePairs(points1, points2, seed, &chance1, &chance2);
+  std::vector<double> squared_residuals;
+  estimator.Residuals(chance1, chance2, model, &squared_residuals);
+  const double max_squared_error = max_error * max_error;
+  size_t num_chance_inliers = 0;
+  for (const double residual : squared_residuals) num_chance_inliers += residual <= max_squared_error;
+  // One more inlier than seen: never p = 0 from a finite sample.
+  const double p = static_cast<double>(num_chance_inliers + 1) /
+                   static_cast<double>(squared_residuals.size() + 1);
+  return Log10NumFalseAlarmsFromChance(n, s, num_inliers, p, kMaxModelsPerSample<Estimator>);
+}
+
+// True when the masked points spread less than `tolerance` across their principal line (or
+// all coincide): no two-view model is determined by them.
+bool AreNearlyCollinear(const std::vector<Eigen::Vector2d>& points, const std::vector<char>& mask,
+                        double tolerance);
+
+// The smaller of the numbers of distinct keypoints of image 1 and of image 2 among the
+// masked matches.
+size_t CountDistinctKeypoints(const FeatureMatches& matches, const std::vector<char>& mask);
+
+}  // namespace parallax
