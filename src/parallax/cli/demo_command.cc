@@ -42,7 +42,7 @@ int RunDemo(int argc, char** argv) {
     options.extraction.camera.intrinsics_path = scene_dir / "K.txt";
     options.extraction.camera.single_camera = true;
     options.matching.geometry.ransac.random_seed = scene.seed;
-    options.mapping.mapper.abs_pose.ransac.random_seed = scene.seed;
+    options.mapping.mapper.absolute_pose.ransac.random_seed = scene.seed;
     const ReconstructionPipelineResult result =
         RunReconstructionPipeline(options, scene_dir, output / "reconstruction");
     if (!result.Success()) {

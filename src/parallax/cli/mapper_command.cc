@@ -29,7 +29,7 @@ int RunMapper(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    options.mapper.abs_pose.ransac.random_seed = seed;
+    options.mapper.absolute_pose.ransac.random_seed = seed;
     if (!options.cluster_file.empty() && options.mapper_type == MapperType::kHierarchical) {
       throw InputError("--cluster maps one cluster incrementally; it cannot be combined with "
                        "--mapper hierarchical");

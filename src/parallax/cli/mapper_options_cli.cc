@@ -12,13 +12,13 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option("--init-min-inliers", mapper.init_min_num_inliers,
                  "Points the initial pair must triangulate")
       ->capture_default_str();
-  app.add_option("--init-min-tri-angle", mapper.init_min_tri_angle_deg,
+  app.add_option("--init-min-tri-angle", mapper.init_min_triangulation_angle_deg,
                  "Median triangulation angle of the initial pair, degrees")
       ->capture_default_str();
-  app.add_option("--abs-pose-min-inliers", mapper.abs_pose_min_num_inliers,
+  app.add_option("--abs-pose-min-inliers", mapper.absolute_pose_min_num_inliers,
                  "PnP inliers an image needs to be registered")
       ->capture_default_str();
-  app.add_option("--abs-pose-max-error", mapper.abs_pose.ransac.max_error,
+  app.add_option("--abs-pose-max-error", mapper.absolute_pose.ransac.max_error,
                  "PnP RANSAC threshold, pixels")
       ->capture_default_str();
   app.add_option("--filter-max-error", mapper.filter.max_reproj_error_px,
@@ -29,17 +29,28 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
       ->capture_default_str();
   app.add_flag("!--no-multiple-models", mapper.multiple_models,
                "Stop after the first model instead of starting new ones");
-  app.add_flag("!--no-refine-intrinsics", mapper.refine_focal_length,
-               "Keep focal lengths fixed even for cameras without a prior");
-  app.add_option("--ba-threads", mapper.bundle_adjustment.num_threads,
-                 "Threads for bundle adjustment (-1: all; any fixed count gives bit-identical "
-                 "runs, except with --ba-solver ceres above 150 images, where Ceres' threaded "
-                 "Schur elimination sums in arrival order)")
-      ->capture_default_str();
+  app.add_flag_function(
+      "--no-refine-intrinsics",
+      [&mapper](int64_t) {
+        mapper.global_ba.refine_focal_length = false;
+        mapper.final_ba.refine_focal_length = false;
+      },
+      "Keep focal lengths fixed even for cameras without a prior");
+  app.add_option_function<int>(
+         "--ba-threads",
+         [&mapper](int num_threads) {
+           for (BundleAdjustmentOptions* ba : mapper.BundleAdjustments()) ba->num_threads = num_threads;
+         },
+         "Threads for bundle adjustment (-1: all; any fixed count gives bit-identical runs, "
+         "except with --ba-solver ceres above 150 images, where Ceres' threaded Schur "
+         "elimination sums in arrival order)")
+      ->default_str("-1");
   app.add_option_function<std::string>(
          "--ba-solver",
          [&mapper](const std::string& name) {
-           mapper.bundle_adjustment.solver = BundleAdjustmentSolverFromName(name).value();
+           for (BundleAdjustmentOptions* ba : mapper.BundleAdjustments()) {
+             ba->solver = BundleAdjustmentSolverFromName(name).value();
+           }
          },
          "auto (Parallax's Schur LM: dense up to 250 images, block-sparse with conjugate "
          "gradients above), dense-schur, sparse-schur, ceres or ceres-iterative")

@@ -38,7 +38,7 @@ int RunReconstruct(int argc, char** argv) {
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
     options.matching.geometry.ransac.random_seed = seed;
-    options.mapping.mapper.abs_pose.ransac.random_seed = seed;
+    options.mapping.mapper.absolute_pose.ransac.random_seed = seed;
     options.mapping.hierarchical.num_threads = num_threads;
     extraction_flags.Apply(&options.extraction);
     matching_flags.Apply(&options.matching);
@@ -47,7 +47,9 @@ int RunReconstruct(int argc, char** argv) {
     options.matching.num_threads = num_threads;
     // --ba-threads, when given, overrides --threads for bundle adjustment.
     if (app.count("--ba-threads") == 0) {
-      options.mapping.mapper.bundle_adjustment.num_threads = num_threads;
+      for (BundleAdjustmentOptions* ba : options.mapping.mapper.BundleAdjustments()) {
+        ba->num_threads = num_threads;
+      }
     }
     const ReconstructionPipelineResult result =
         RunReconstructionPipeline(options, image_dir, output_dir);

@@ -435,7 +435,7 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
 bool EstimateTwoViewGeometryPose(const Camera& camera1, const std::vector<Eigen::Vector2d>& points1,
                                  const Camera& camera2, const std::vector<Eigen::Vector2d>& points2,
                                  TwoViewGeometry* geometry) {
-  geometry->tri_angle = 0.0;
+  geometry->triangulation_angle = 0.0;
   const int config = geometry->config;
   const bool epipolar =
       config == TwoViewGeometry::kCalibrated || config == TwoViewGeometry::kUncalibrated;
@@ -488,7 +488,7 @@ bool EstimateTwoViewGeometryPose(const Camera& camera1, const std::vector<Eigen:
     }
     const auto middle = angles.begin() + static_cast<std::ptrdiff_t>(angles.size() / 2);
     std::nth_element(angles.begin(), middle, angles.end());
-    geometry->tri_angle = *middle;
+    geometry->triangulation_angle = *middle;
   }
   return true;
 }

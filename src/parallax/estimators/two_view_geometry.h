@@ -37,7 +37,7 @@ struct TwoViewGeometryOptions {
   double watermark_min_inlier_ratio = 0.7;
   // Use the essential matrix when both cameras have a prior focal length.
   bool use_essential_when_calibrated = true;
-  // Compute cam2_from_cam1 and tri_angle for calibrated/uncalibrated pairs.
+  // Compute cam2_from_cam1 and triangulation_angle for calibrated/uncalibrated pairs.
   bool compute_relative_pose = true;
   void Check() const;
 };
@@ -55,7 +55,7 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
                                         const TwoViewGeometryOptions& options);
 
 // Relative pose and median triangulation angle of a verified pair from its E (or F and the
-// cameras, or H): fills geometry->cam2_from_cam1 and tri_angle. False when no pose.
+// cameras, or H): fills geometry->cam2_from_cam1 and triangulation_angle. False when no pose.
 bool EstimateTwoViewGeometryPose(const Camera& camera1, const std::vector<Eigen::Vector2d>& points1,
                                  const Camera& camera2, const std::vector<Eigen::Vector2d>& points2,
                                  TwoViewGeometry* geometry);

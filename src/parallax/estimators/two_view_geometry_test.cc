@@ -169,7 +169,7 @@ TEST(EstimateTwoViewGeometry, CalibratedExactRecoversPose) {
               1e-8);
     EXPECT_LT((geometry.cam2_from_cam1.translation - scene.cam2_from_cam1.translation).norm(),
               1e-8);
-    EXPECT_NEAR(geometry.tri_angle, scene.TrueTriAngle(), 1e-8);
+    EXPECT_NEAR(geometry.triangulation_angle, scene.TrueTriAngle(), 1e-8);
     EXPECT_GT(geometry.F.norm(), 0.0);
     EXPECT_GT(geometry.H.norm(), 0.0);
   }
@@ -187,7 +187,7 @@ TEST(EstimateTwoViewGeometry, CalibratedNoiseAndOutliers) {
     EXPECT_LT(TranslationAngleDegrees(geometry.cam2_from_cam1.translation,
                                       scene.cam2_from_cam1.translation),
               1.0);
-    EXPECT_NEAR(geometry.tri_angle, scene.TrueTriAngle(), 0.02 * scene.TrueTriAngle());
+    EXPECT_NEAR(geometry.triangulation_angle, scene.TrueTriAngle(), 0.02 * scene.TrueTriAngle());
   }
 }
 
@@ -229,7 +229,7 @@ TEST(EstimateTwoViewGeometry, PlanarSceneIsDetected) {
       EXPECT_EQ(geometry.config, TwoViewGeometry::kPlanar)
           << "noise " << noise << " calibrated " << calibrated;
       ExpectGoodInliers(scene, geometry);
-      EXPECT_GT(geometry.tri_angle, 0.0);
+      EXPECT_GT(geometry.triangulation_angle, 0.0);
       EXPECT_NEAR(geometry.cam2_from_cam1.translation.norm(), 1.0, 1e-9);
     }
   }
@@ -252,7 +252,7 @@ TEST(EstimateTwoViewGeometry, PureRotationIsPanoramic) {
     EXPECT_LT(RotationAngleDegrees(geometry.cam2_from_cam1.rotation, scene.cam2_from_cam1.rotation),
               0.1);
     EXPECT_EQ(geometry.cam2_from_cam1.translation, Eigen::Vector3d::Zero());
-    EXPECT_EQ(geometry.tri_angle, 0.0);
+    EXPECT_EQ(geometry.triangulation_angle, 0.0);
   }
 }
 
@@ -460,12 +460,12 @@ TEST(EstimateTwoViewGeometryPose, FromFundamentalAndRefusals) {
   options.compute_relative_pose = false;
   TwoViewGeometry geometry = Estimate(scene, options);
   ASSERT_EQ(geometry.config, TwoViewGeometry::kUncalibrated);
-  EXPECT_EQ(geometry.tri_angle, 0.0);
+  EXPECT_EQ(geometry.triangulation_angle, 0.0);
   ASSERT_TRUE(EstimateTwoViewGeometryPose(scene.camera1, scene.points1, scene.camera2,
                                           scene.points2, &geometry));
   EXPECT_LT(RotationAngleDegrees(geometry.cam2_from_cam1.rotation, scene.cam2_from_cam1.rotation),
             1e-6);
-  EXPECT_NEAR(geometry.tri_angle, scene.TrueTriAngle(), 1e-6);
+  EXPECT_NEAR(geometry.triangulation_angle, scene.TrueTriAngle(), 1e-6);
   geometry.config = TwoViewGeometry::kDegenerate;
   EXPECT_FALSE(EstimateTwoViewGeometryPose(scene.camera1, scene.points1, scene.camera2,
                                            scene.points2, &geometry));

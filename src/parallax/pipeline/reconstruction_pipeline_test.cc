@@ -90,7 +90,7 @@ TEST_F(TempleRingTest, KnownIntrinsics) {
   // the machine: fix every thread count.
   options.extraction.num_threads = 2;
   options.matching.num_threads = 2;
-  options.mapping.mapper.bundle_adjustment.num_threads = 2;
+  for (BundleAdjustmentOptions* ba : options.mapping.mapper.BundleAdjustments()) ba->num_threads = 2;
   ASSERT_NO_FATAL_FAILURE(Reconstruct(options));
   EXPECT_EQ(model_.NumRegImages(), 47u);
   EXPECT_LE(metrics_.center_error.median, 0.0013);  // Metres.

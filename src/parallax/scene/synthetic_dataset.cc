@@ -328,7 +328,7 @@ void WriteSyntheticDatabase(const Reconstruction& truth, Database* database,
                                           truth.GetPoint3D(point3D_id).xyz));
     }
     std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
-    geometry.tri_angle = angles[angles.size() / 2];
+    geometry.triangulation_angle = angles[angles.size() / 2];
 
     // Wrong matches go to the raw matches only, preferably between outlier keypoints.
     std::vector<point2D_t> free1, free2;

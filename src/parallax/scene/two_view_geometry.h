@@ -30,7 +30,7 @@ struct TwoViewGeometry {
   Rigid3d cam2_from_cam1;
   FeatureMatches inlier_matches;
   // Median triangulation angle in radians of the inliers (0 when unknown).
-  double tri_angle = 0.0;
+  double triangulation_angle = 0.0;
 };
 
 }  // namespace parallax

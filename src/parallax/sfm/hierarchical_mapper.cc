@@ -47,8 +47,9 @@ std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
   const int num_workers =
       std::max(1, std::min(EffectiveNumThreads(options_.num_threads), static_cast<int>(clusters.size())));
   IncrementalMapperOptions cluster_options = mapper_options_;
-  cluster_options.bundle_adjustment.num_threads =
-      std::max(1, EffectiveNumThreads(mapper_options_.bundle_adjustment.num_threads) / num_workers);
+  for (BundleAdjustmentOptions* ba : cluster_options.BundleAdjustments()) {
+    ba->num_threads = std::max(1, EffectiveNumThreads(ba->num_threads) / num_workers);
+  }
   size_t total_images = 0;
   for (const auto& cluster : clusters) total_images += cluster.size();
   PARALLAX_LOG(Info) << "mapper: " << clusters.size() << " clusters, " << total_images
@@ -60,7 +61,7 @@ std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
     const ImageCluster cluster = MakeImageCluster(input_, clusters[index]);
     const MapperInput part = ClusterMapperInput(input_, cluster, "cluster");
     IncrementalMapperOptions options = cluster_options;
-    options.abs_pose.ransac.random_seed = DeriveSeed(cluster_options.abs_pose.ransac.random_seed, index);
+    options.absolute_pose.ransac.random_seed = DeriveSeed(cluster_options.absolute_pose.ransac.random_seed, index);
     IncrementalMapper mapper(options, part);
     mapper.SetProgress(&progress);
     MapperSummary cluster_summary;

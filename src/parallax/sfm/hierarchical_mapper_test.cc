@@ -91,7 +91,7 @@ TEST(HierarchicalMapper, SameResultWhicheverThreadMapsACluster) {
   for (const int num_threads : {1, 2}) {
     options.num_threads = num_threads;
     IncrementalMapperOptions mapper_options;
-    mapper_options.bundle_adjustment.num_threads = 1;
+    for (BundleAdjustmentOptions* ba : mapper_options.BundleAdjustments()) ba->num_threads = 1;
     HierarchicalMapper mapper(options, mapper_options, input);
     MapperSummary summary;
     HierarchicalMapperSummary hierarchical;

@@ -20,23 +20,22 @@ namespace parallax {
 
 void IncrementalMapperOptions::Check() const {
   PARALLAX_CHECK_GE(init_min_num_inliers, 1);
-  PARALLAX_CHECK_GE(init_min_tri_angle_deg, 0.0);
+  PARALLAX_CHECK_GE(init_min_triangulation_angle_deg, 0.0);
   PARALLAX_CHECK_GE(init_max_trials, 1);
-  abs_pose.Check();
-  abs_pose_refinement.Check();
-  PARALLAX_CHECK_GE(abs_pose_min_num_inliers, 3);
-  PARALLAX_CHECK(abs_pose_min_inlier_ratio >= 0 && abs_pose_min_inlier_ratio <= 1);
+  absolute_pose.Check();
+  absolute_pose_refinement.Check();
+  PARALLAX_CHECK_GE(absolute_pose_min_num_inliers, 3);
+  PARALLAX_CHECK(absolute_pose_min_inlier_ratio >= 0 && absolute_pose_min_inlier_ratio <= 1);
   PARALLAX_CHECK_GE(max_registration_trials, 1);
   triangulation.Check();
   filter.Check();
-  bundle_adjustment.Check();
+  local_ba.Check();
+  global_ba.Check();
+  final_ba.Check();
   PARALLAX_CHECK_GE(local_ba_num_images, 2);
-  PARALLAX_CHECK_GE(local_ba_max_iterations, 1);
-  PARALLAX_CHECK_GE(global_ba_max_iterations, 1);
   PARALLAX_CHECK_GE(global_ba_images_ratio, 1.0);
   PARALLAX_CHECK_GE(global_ba_points_ratio, 1.0);
   PARALLAX_CHECK_GE(global_ba_max_refinements, 1);
-  PARALLAX_CHECK_GE(final_ba_max_iterations, 1);
   PARALLAX_CHECK_GE(min_model_size, 2);
   PARALLAX_CHECK_GE(max_num_models, 1);
 }
@@ -90,7 +89,7 @@ class IncrementalMapper::ModelBuilder {
       return a.second->inlier_matches.size() > b.second->inlier_matches.size();
     });
     for (const double angle_factor : {1.0, 0.5, 0.25}) {
-      const double min_angle_deg = options_.init_min_tri_angle_deg * angle_factor;
+      const double min_angle_deg = options_.init_min_triangulation_angle_deg * angle_factor;
       int trials = 0;
       for (const auto& [pair_id, geometry] : candidates) {
         if (trials++ >= options_.init_max_trials) break;
@@ -293,7 +292,7 @@ class IncrementalMapper::ModelBuilder {
       links.emplace_back(idx, point3D_id);
     }
     report->num_visible_points = points2D.size();
-    const size_t min_inliers = static_cast<size_t>(options_.abs_pose_min_num_inliers);
+    const size_t min_inliers = static_cast<size_t>(options_.absolute_pose_min_num_inliers);
     if (points2D.size() < min_inliers) {
       report->reason = "too few 2D-3D correspondences: " + std::to_string(points2D.size()) +
                        " (need " + std::to_string(min_inliers) + ")";
@@ -301,24 +300,24 @@ class IncrementalMapper::ModelBuilder {
     }
     // One seed per image (and attempt), derived from the mapper's: the same run registers the
     // same way whatever came before.
-    AbsolutePoseEstimationOptions pose_options = options_.abs_pose;
+    AbsolutePoseEstimationOptions pose_options = options_.absolute_pose;
     pose_options.ransac.random_seed =
-        DeriveSeed(options_.abs_pose.ransac.random_seed,
+        DeriveSeed(options_.absolute_pose.ransac.random_seed,
                    (static_cast<uint64_t>(image_id) << 8) | (report->num_registration_trials & 0xff));
     const AbsolutePoseReport pose = EstimateAbsolutePose(camera, points2D, points3D, pose_options);
     report->num_pnp_inliers = pose.num_inliers;
     const double inlier_ratio = static_cast<double>(pose.num_inliers) / points2D.size();
     if (!pose.success || pose.num_inliers < min_inliers ||
-        inlier_ratio < options_.abs_pose_min_inlier_ratio) {
+        inlier_ratio < options_.absolute_pose_min_inlier_ratio) {
       report->reason = "PnP inliers below the bar: " + std::to_string(pose.num_inliers) + " of " +
                        std::to_string(points2D.size()) + " correspondences (need " +
                        std::to_string(min_inliers) + " and ratio " +
-                       std::to_string(options_.abs_pose_min_inlier_ratio) + ")";
+                       std::to_string(options_.absolute_pose_min_inlier_ratio) + ")";
       return false;
     }
     Rigid3d cam_from_world = pose.cam_from_world;
     Camera refined_camera = camera;
-    if (!RefineAbsolutePose(options_.abs_pose_refinement, pose.inlier_mask, points2D, points3D,
+    if (!RefineAbsolutePose(options_.absolute_pose_refinement, pose.inlier_mask, points2D, points3D,
                             &cam_from_world, &refined_camera)) {
       report->reason = "pose rejected by non-linear refinement";
       return false;
@@ -366,20 +365,6 @@ class IncrementalMapper::ModelBuilder {
     }
   }
 
-  // Local adjustments keep intrinsics fixed; global ones refine those without a prior.
-  // Both use the intermediate loss; the final global adjustment switches to the robust one.
-  BundleAdjustmentOptions BaOptions(bool global) const {
-    const bool refine_intrinsics = global;
-    BundleAdjustmentOptions ba = options_.bundle_adjustment;
-    ba.loss_function = options_.intermediate_ba_loss;
-    ba.max_num_iterations =
-        global ? options_.global_ba_max_iterations : options_.local_ba_max_iterations;
-    ba.refine_focal_length = refine_intrinsics && options_.refine_focal_length;
-    ba.refine_extra_params = refine_intrinsics && options_.refine_extra_params;
-    ba.refine_principal_point = refine_intrinsics && options_.refine_principal_point;
-    return ba;
-  }
-
   // Cameras with a known focal length stay fixed; others are refined once the model has
   // enough images to constrain them.
   void SetCameraConstancy(BundleAdjustmentConfig* config) const {
@@ -423,7 +408,7 @@ class IncrementalMapper::ModelBuilder {
     for (const auto& [camera_id, camera] : reconstruction_.Cameras()) {
       config.constant_cameras.insert(camera_id);
     }
-    RunBundleAdjustment(BaOptions(false), config);
+    RunBundleAdjustment(options_.local_ba, config);
     ++summary_->num_local_ba;
     // Points of the adjusted images may have moved: filter them, then let the new image's
     // tracks pick up observations that now fit.
@@ -464,7 +449,7 @@ class IncrementalMapper::ModelBuilder {
   // The principal point is worth freeing only when every camera being refined is seen by
   // enough images; with few views it trades off against focal length and pose.
   bool PrincipalPointsConstrained() const {
-    if (options_.final_principal_point_min_images <= 0 || !options_.refine_focal_length) {
+    if (options_.final_principal_point_min_images <= 0 || !options_.final_ba.refine_focal_length) {
       return false;
     }
     std::map<camera_t, int> num_images;
@@ -507,11 +492,7 @@ class IncrementalMapper::ModelBuilder {
       for (const image_t image_id : reconstruction_.RegImageIds()) config.AddImage(image_id);
       FixGauge(&config);
       SetCameraConstancy(&config);
-      BundleAdjustmentOptions ba_options = BaOptions(true);
-      if (final) {
-        ba_options.loss_function = options_.bundle_adjustment.loss_function;
-        ba_options.max_num_iterations = options_.final_ba_max_iterations;
-      }
+      BundleAdjustmentOptions ba_options = final ? options_.final_ba : options_.global_ba;
       ba_options.refine_principal_point |= refine_principal_point;
       RunBundleAdjustment(ba_options, config);
       ++summary_->num_global_ba;

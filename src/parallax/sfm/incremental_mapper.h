@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <limits>
 #include <map>
 #include <string>
@@ -18,35 +19,50 @@ namespace parallax {
 struct IncrementalMapperOptions {
   // Initial pair.
   int init_min_num_inliers = 100;        // Triangulated points the initial pair must give.
-  double init_min_tri_angle_deg = 16.0;  // Median triangulation angle of the initial pair.
+  double init_min_triangulation_angle_deg = 16.0;  // Median triangulation angle of the initial pair.
   int init_max_trials = 200;             // Candidate pairs examined per angle threshold.
   // Registration of the next image.
-  AbsolutePoseEstimationOptions abs_pose;
-  AbsolutePoseRefinementOptions abs_pose_refinement;
-  int abs_pose_min_num_inliers = 30;     // PnP inliers an image needs to be registered.
-  double abs_pose_min_inlier_ratio = 0.25;
+  AbsolutePoseEstimationOptions absolute_pose;
+  AbsolutePoseRefinementOptions absolute_pose_refinement;
+  int absolute_pose_min_num_inliers = 30;     // PnP inliers an image needs to be registered.
+  double absolute_pose_min_inlier_ratio = 0.25;
   int max_registration_trials = 2;       // Failed attempts before an image is given up.
   // Triangulation and filtering.
   TrackTriangulationOptions triangulation;
   ObservationFilterOptions filter;
-  // Bundle adjustment. `bundle_adjustment` (robust Cauchy loss) is the final global
-  // adjustment's; local and intermediate global ones use `intermediate_ba_loss` instead. On
-  // templeRing, Cauchy everywhere took 20 s of BA and squared loss everywhere left 1.8 mm
-  // median centre error; squared loss while growing plus a Cauchy finish gives 0.73 mm in
-  // a quarter of the time (LM with the Cauchy loss creeps: 25-45 iterations per solve).
-  BundleAdjustmentOptions bundle_adjustment;
-  LossFunctionType intermediate_ba_loss = LossFunctionType::kTrivial;
-  int final_ba_max_iterations = 10;      // Per refinement round of the final adjustment.
+  // Bundle adjustment: one options struct per use, each used as it is. The mapper chooses
+  // only the images and what stays constant: every camera in local adjustments, cameras with
+  // a prior focal length (and all until three images are registered) in global ones. Squared
+  // loss while the model grows and a robust finish is faster and more accurate than either
+  // loss throughout (README, "Defaults worth knowing").
+  BundleAdjustmentOptions local_ba = [] {  // Around each new image; intrinsics fixed.
+    BundleAdjustmentOptions options;
+    options.loss_function = LossFunctionType::kTrivial;
+    options.max_num_iterations = 25;
+    return options;
+  }();
+  BundleAdjustmentOptions global_ba = [] {  // Whenever the model has grown enough.
+    BundleAdjustmentOptions options;
+    options.loss_function = LossFunctionType::kTrivial;
+    options.max_num_iterations = 50;
+    options.refine_focal_length = true;
+    options.refine_extra_params = true;
+    return options;
+  }();
+  BundleAdjustmentOptions final_ba = [] {  // The last one; iterations per refinement round.
+    BundleAdjustmentOptions options;
+    options.loss_function = LossFunctionType::kCauchy;
+    options.max_num_iterations = 10;
+    options.refine_focal_length = true;
+    options.refine_extra_params = true;
+    return options;
+  }();
+  // The three, for settings that apply to every adjustment (threads, solver).
+  std::array<BundleAdjustmentOptions*, 3> BundleAdjustments() { return {&local_ba, &global_ba, &final_ba}; }
   int local_ba_num_images = 6;           // Images optimised around each new image.
-  int local_ba_max_iterations = 25;      // Solver iterations of a local adjustment.
-  int global_ba_max_iterations = 50;     // Solver iterations of a global adjustment.
   double global_ba_images_ratio = 1.1;   // Global BA when the model grew by this factor...
   double global_ba_points_ratio = 1.1;   // ...in images or in points.
-  int global_ba_max_refinements = 3;     // BA + filter + complete rounds at each global BA.
-  // Intrinsics of cameras without a prior focal length are refined in global BA.
-  bool refine_focal_length = true;
-  bool refine_extra_params = true;
-  bool refine_principal_point = false;  // In every global adjustment.
+  int global_ba_max_refinements = 3;     // BA + filter + complete rounds of the final BA.
   // The final adjustment also frees the principal point of cameras without a prior when each
   // is seen by at least this many images (0: never), and keeps it only if it stays near the
   // image centre. On templeRing without intrinsics the centred principal point is 18 px off
