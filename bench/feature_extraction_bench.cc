@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/feature/sift.h"
 #include "parallax/util/file.h"
 #include "parallax/util/timer.h"

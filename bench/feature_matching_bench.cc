@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/feature/sift.h"
 #include "parallax/feature/similarity_kernel.h"

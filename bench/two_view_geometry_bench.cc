@@ -19,7 +19,7 @@
 #include "parallax/estimators/solvers/fundamental_matrix.h"
 #include "parallax/estimators/solvers/homography_matrix.h"
 #include "parallax/estimators/two_view_geometry.h"
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/feature/sift.h"
 #include "parallax/math/random.h"

@@ -1,8 +1,8 @@
-// Image header sniffing (feature/image_reader.h): format by magic number, size from the PNG,
+// Image header sniffing (image/image_reader.h): format by magic number, size from the PNG,
 // JPEG, TIFF or BMP header, and the whole read path with a small pixel limit, so the decoders
 // only ever see images the header check let through.
 #include "fuzz/fuzz_common.h"
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view bytes = parallax::fuzz::AsStringView(data, size);

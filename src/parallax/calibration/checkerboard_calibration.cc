@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "parallax/calibration/exif.h"
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
 #include "parallax/util/threading.h"

@@ -7,7 +7,7 @@
 #include <iostream>
 #include <opencv2/imgproc.hpp>
 
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"

@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/feature/sift.h"
 #include "parallax/pipeline/camera_setup.h"
 #include "parallax/scene/database.h"

@@ -2,7 +2,7 @@
 
 #include <unistd.h>
 
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"

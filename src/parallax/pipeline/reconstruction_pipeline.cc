@@ -1,6 +1,6 @@
 #include "parallax/pipeline/reconstruction_pipeline.h"
 
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"

@@ -9,7 +9,7 @@
 #include <random>
 
 #include "parallax/calibration/exif_writer.h"
-#include "parallax/feature/image_codecs.h"
+#include "parallax/image/image_codecs.h"
 #include "parallax/render/covisibility.h"
 #include "parallax/render/procedural_texture.h"
 #include "parallax/util/check.h"

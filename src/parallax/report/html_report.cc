@@ -8,7 +8,7 @@
 #include <tuple>
 #include <unordered_map>
 
-#include "parallax/feature/image_codecs.h"
+#include "parallax/image/image_codecs.h"
 #include "parallax/report/html_report_assets.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"

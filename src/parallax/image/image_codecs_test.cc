@@ -1,4 +1,4 @@
-#include "parallax/feature/image_codecs.h"
+#include "parallax/image/image_codecs.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 
-#include "parallax/feature/image_codecs.h"
+#include "parallax/image/image_codecs.h"
 #include "parallax/util/byte_order.h"
 
 #include <algorithm>

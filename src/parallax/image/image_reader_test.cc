@@ -1,4 +1,4 @@
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -4,7 +4,7 @@
 #include <string>
 #include <string_view>
 
-#include "parallax/feature/image_reader.h"
+#include "parallax/image/image_reader.h"
 
 namespace parallax {
 
