@@ -21,7 +21,7 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option("--abs-pose-max-error", mapper.absolute_pose.ransac.max_error,
                  "PnP RANSAC threshold, pixels")
       ->capture_default_str();
-  app.add_option("--filter-max-error", mapper.filter.max_reproj_error_px,
+  app.add_option("--filter-max-error", mapper.filter.max_reprojection_error_px,
                  "Observations reprojecting further are removed, pixels")
       ->capture_default_str();
   app.add_option("--min-tri-angle", mapper.triangulation.min_angle_deg,

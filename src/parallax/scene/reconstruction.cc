@@ -233,14 +233,19 @@ double Reconstruction::ComputeMeanObservationsPerRegImage() const {
 }
 
 double Reconstruction::ReprojectionError(image_t image_id, point2D_t point2D_idx) const {
-  const Image& image = GetImage(image_id);
-  const Point2D& point2D = image.points2D.at(point2D_idx);
+  const Point2D& point2D = GetImage(image_id).points2D.at(point2D_idx);
   PARALLAX_CHECK(point2D.HasPoint3D());
-  const Eigen::Vector3d point_in_cam = image.cam_from_world * GetPoint3D(point2D.point3D_id).xyz;
+  return ReprojectionError(image_id, point2D_idx, GetPoint3D(point2D.point3D_id).xyz);
+}
+
+double Reconstruction::ReprojectionError(image_t image_id, point2D_t point2D_idx,
+                                         const Eigen::Vector3d& xyz) const {
+  const Image& image = GetImage(image_id);
+  const Eigen::Vector3d point_in_cam = image.cam_from_world * xyz;
   if (point_in_cam.z() <= std::numeric_limits<double>::epsilon()) {
     return std::numeric_limits<double>::infinity();
   }
-  return (GetCamera(image.camera_id).ImgFromCam(point_in_cam) - point2D.xy).norm();
+  return (GetCamera(image.camera_id).ImgFromCam(point_in_cam) - image.points2D[point2D_idx].xy).norm();
 }
 
 double Reconstruction::UpdatePointErrors() {

@@ -72,6 +72,9 @@ class Reconstruction {
 
   // Reprojection error in pixels of one observation, or +inf when behind the camera.
   double ReprojectionError(image_t image_id, point2D_t point2D_idx) const;
+  // The same for any world point `xyz` seen in that keypoint (a candidate position while
+  // triangulating, or a point being tested against a new view).
+  double ReprojectionError(image_t image_id, point2D_t point2D_idx, const Eigen::Vector3d& xyz) const;
   // Recomputes Point3D::error for every point; returns the mean over all observations.
   double UpdatePointErrors();
   // Mean reprojection error over all observations of one image (0 with none).

@@ -199,7 +199,7 @@ class IncrementalMapper::ModelBuilder {
     const Matrix3x4d proj1 = Rigid3d().ToMatrix();
     const Matrix3x4d proj2 = cam2_from_cam1.ToMatrix();
     const Eigen::Vector3d center2 = ProjectionCenter(cam2_from_cam1);
-    const double max_error = options_.triangulation.max_reproj_error_px;
+    const double max_error = options_.triangulation.max_reprojection_error_px;
     std::vector<double> angles;
     for (size_t i = 0; i < points1.size(); ++i) {
       const auto xyz = TriangulatePoint(proj1, proj2, points1[i], points2[i]);
@@ -329,9 +329,9 @@ class IncrementalMapper::ModelBuilder {
       if (!pose.inlier_mask[i]) continue;
       const auto [point2D_idx, point3D_id] = links[i];
       if (!reconstruction_.ExistsPoint3D(point3D_id)) continue;
-      const double error = ObservationError(reconstruction_, image_id, point2D_idx,
+      const double error = reconstruction_.ReprojectionError(image_id, point2D_idx,
                                             reconstruction_.GetPoint3D(point3D_id).xyz);
-      if (error <= options_.triangulation.max_reproj_error_px) {
+      if (error <= options_.triangulation.max_reprojection_error_px) {
         reconstruction_.AddObservation(point3D_id, {image_id, point2D_idx});
         ++num_added;
       }

@@ -3,20 +3,19 @@
 #include <cmath>
 
 #include "parallax/geometry/triangulation.h"
-#include "parallax/sfm/track_triangulation.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
 
 void ObservationFilterOptions::Check() const {
-  PARALLAX_CHECK_GT(max_reproj_error_px, 0.0);
-  PARALLAX_CHECK_GE(min_tri_angle_deg, 0.0);
+  PARALLAX_CHECK_GT(max_reprojection_error_px, 0.0);
+  PARALLAX_CHECK_GE(min_triangulation_angle_deg, 0.0);
 }
 
 size_t FilterPoints(const ObservationFilterOptions& options,
                     const std::vector<point3D_t>& point3D_ids, Reconstruction* reconstruction) {
   options.Check();
-  const double min_angle = options.min_tri_angle_deg * M_PI / 180.0;
+  const double min_angle = options.min_triangulation_angle_deg * M_PI / 180.0;
   size_t num_removed = 0;
   std::vector<TrackElement> bad;
   for (const point3D_t point3D_id : point3D_ids) {
@@ -25,8 +24,8 @@ size_t FilterPoints(const ObservationFilterOptions& options,
     bad.clear();
     for (const TrackElement& element : point.track.elements) {
       const double error =
-          ObservationError(*reconstruction, element.image_id, element.point2D_idx, point.xyz);
-      if (!(error <= options.max_reproj_error_px)) bad.push_back(element);
+          reconstruction->ReprojectionError(element.image_id, element.point2D_idx, point.xyz);
+      if (!(error <= options.max_reprojection_error_px)) bad.push_back(element);
     }
     const size_t track_length = point.track.Length();
     if (bad.size() + 1 >= track_length) {

@@ -11,19 +11,8 @@ namespace parallax {
 
 void TrackTriangulationOptions::Check() const {
   PARALLAX_CHECK_GE(min_angle_deg, 0.0);
-  PARALLAX_CHECK_GT(max_reproj_error_px, 0.0);
+  PARALLAX_CHECK_GT(max_reprojection_error_px, 0.0);
   PARALLAX_CHECK_GE(max_pair_trials, 1);
-}
-
-double ObservationError(const Reconstruction& reconstruction, image_t image_id,
-                        point2D_t point2D_idx, const Eigen::Vector3d& xyz) {
-  const Image& image = reconstruction.GetImage(image_id);
-  const Eigen::Vector3d point_in_cam = image.cam_from_world * xyz;
-  if (point_in_cam.z() <= std::numeric_limits<double>::epsilon()) {
-    return std::numeric_limits<double>::infinity();
-  }
-  const Camera& camera = reconstruction.GetCamera(image.camera_id);
-  return (camera.ImgFromCam(point_in_cam) - image.points2D[point2D_idx].xy).norm();
 }
 
 namespace {
@@ -63,8 +52,8 @@ std::vector<size_t> AgreeingViews(const std::vector<View>& views, const Eigen::V
   std::vector<size_t> agreeing;
   *error_sum = 0;
   for (size_t i = 0; i < views.size(); ++i) {
-    const double error = ObservationError(reconstruction, views[i].element.image_id,
-                                          views[i].element.point2D_idx, xyz);
+    const double error = reconstruction.ReprojectionError(views[i].element.image_id,
+                                                          views[i].element.point2D_idx, xyz);
     if (error <= max_error) {
       agreeing.push_back(i);
       *error_sum += error;
@@ -118,7 +107,7 @@ point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t tra
     if (CalculateTriangulationAngle(views[a].center, views[b].center, *xyz) < min_angle) continue;
     double error_sum = 0;
     std::vector<size_t> agreeing =
-        AgreeingViews(views, *xyz, reconstruction, options.max_reproj_error_px, &error_sum);
+        AgreeingViews(views, *xyz, reconstruction, options.max_reprojection_error_px, &error_sum);
     if (agreeing.size() > best_views.size() ||
         (agreeing.size() == best_views.size() && error_sum < best_error)) {
       best_views = std::move(agreeing);
@@ -138,7 +127,7 @@ point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t tra
   if (!refined) return kInvalidPoint3DId;
   double error_sum = 0;
   const std::vector<size_t> final_views =
-      AgreeingViews(views, *refined, reconstruction, options.max_reproj_error_px, &error_sum);
+      AgreeingViews(views, *refined, reconstruction, options.max_reprojection_error_px, &error_sum);
   if (final_views.size() < 2 || MaxAngle(views, final_views, *refined) < min_angle) {
     return kInvalidPoint3DId;
   }
@@ -160,13 +149,20 @@ size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
     if (!reconstruction.ExistsImage(element.image_id)) continue;
     const Image& image = reconstruction.GetImage(element.image_id);
     if (!image.registered || image.points2D[element.point2D_idx].HasPoint3D()) continue;
-    if (ObservationError(reconstruction, element.image_id, element.point2D_idx, xyz) <=
-        options.max_reproj_error_px) {
+    if (reconstruction.ReprojectionError(element.image_id, element.point2D_idx, xyz) <=
+        options.max_reprojection_error_px) {
       reconstruction.AddObservation(point3D_id, element);
       ++num_added;
     }
   }
   return num_added;
+}
+
+size_t ContinueOrTriangulateTrack(const TrackTriangulationOptions& options, track_t track_id,
+                                  TrackedReconstruction* model) {
+  if (model->PointOfTrack(track_id) != kInvalidPoint3DId) return ContinueTrack(options, track_id, model);
+  const point3D_t point3D_id = TriangulateTrack(options, track_id, model);
+  return point3D_id == kInvalidPoint3DId ? 0 : model->Model().GetPoint3D(point3D_id).track.Length();
 }
 
 size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_id,
@@ -176,15 +172,7 @@ size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_
   size_t num_added = 0;
   for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
     const track_t track_id = tracks[idx];
-    if (track_id == kInvalidTrackId) continue;
-    if (model->PointOfTrack(track_id) != kInvalidPoint3DId) {
-      num_added += ContinueTrack(options, track_id, model);
-    } else {
-      const point3D_t point3D_id = TriangulateTrack(options, track_id, model);
-      if (point3D_id != kInvalidPoint3DId) {
-        num_added += model->Model().GetPoint3D(point3D_id).track.Length();
-      }
-    }
+    if (track_id != kInvalidTrackId) num_added += ContinueOrTriangulateTrack(options, track_id, model);
   }
   return num_added;
 }
@@ -192,14 +180,7 @@ size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_
 size_t CompleteAllTracks(const TrackTriangulationOptions& options, TrackedReconstruction* model) {
   size_t num_added = 0;
   for (track_t track_id = 0; track_id < model->Graph().NumTracks(); ++track_id) {
-    if (model->PointOfTrack(track_id) != kInvalidPoint3DId) {
-      num_added += ContinueTrack(options, track_id, model);
-    } else {
-      const point3D_t point3D_id = TriangulateTrack(options, track_id, model);
-      if (point3D_id != kInvalidPoint3DId) {
-        num_added += model->Model().GetPoint3D(point3D_id).track.Length();
-      }
-    }
+    num_added += ContinueOrTriangulateTrack(options, track_id, model);
   }
   return num_added;
 }

@@ -6,7 +6,7 @@ namespace parallax {
 
 struct TrackTriangulationOptions {
   double min_angle_deg = 1.5;       // Smallest triangulation angle a new point needs.
-  double max_reproj_error_px = 4.0; // Observations further off are not part of the point.
+  double max_reprojection_error_px = 4.0; // Observations further off are not part of the point.
   int max_pair_trials = 30;         // View pairs tried as hypotheses for long tracks.
   void Check() const;
 };
@@ -24,15 +24,16 @@ point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t tra
 size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
                      TrackedReconstruction* model);
 
+// ContinueTrack when the track has a point, else TriangulateTrack. Returns the observations
+// added.
+size_t ContinueOrTriangulateTrack(const TrackTriangulationOptions& options, track_t track_id,
+                                  TrackedReconstruction* model);
+
 // Continues or triangulates every track with an element in `image_id`.
 size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_id,
                         TrackedReconstruction* model);
 
 // Continues or triangulates every track (after global bundle adjustment).
 size_t CompleteAllTracks(const TrackTriangulationOptions& options, TrackedReconstruction* model);
-
-// Reprojection error in pixels of a world point in an image's keypoint, +inf when behind.
-double ObservationError(const Reconstruction& reconstruction, image_t image_id,
-                        point2D_t point2D_idx, const Eigen::Vector3d& xyz);
 
 }  // namespace parallax
