@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "parallax/math/eigen_types.h"
+#include "parallax/estimators/solvers/solver_estimator.h"
 
 namespace parallax {
 
@@ -35,20 +36,8 @@ void ComputeSquaredProjectionErrors(const std::vector<Eigen::Vector2d>& points2D
 
 // RANSAC estimator (optim/ransac.h) for the projection matrix of an uncalibrated camera.
 // X: pixels; Y: world points.
-struct DLTResectionEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector3d;
-  using M_t = Matrix3x4d;
-  static constexpr int kMinNumSamples = 6;
-
-  void Estimate(const std::vector<X_t>& points2D, const std::vector<Y_t>& points3D,
-                std::vector<M_t>* proj_matrices) const {
-    SolveDLTResection(points2D, points3D, proj_matrices);
-  }
-  void Residuals(const std::vector<X_t>& points2D, const std::vector<Y_t>& points3D,
-                 const M_t& proj_matrix, std::vector<double>* squared_residuals) const {
-    ComputeSquaredProjectionErrors(points2D, points3D, proj_matrix, squared_residuals);
-  }
-};
+using DLTResectionEstimator =
+    SolverEstimator<Eigen::Vector2d, Eigen::Vector3d, Matrix3x4d, 6, SolveDLTResection,
+                    ComputeSquaredProjectionErrors>;
 
 }  // namespace parallax

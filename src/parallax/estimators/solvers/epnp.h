@@ -5,6 +5,7 @@
 
 #include "parallax/estimators/solvers/p3p.h"
 #include "parallax/geometry/rigid3.h"
+#include "parallax/estimators/solvers/solver_estimator.h"
 
 namespace parallax {
 
@@ -35,20 +36,7 @@ bool RefineAbsolutePoseLeastSquares(const std::vector<Eigen::Vector2d>& points2D
 
 // Non-minimal RANSAC estimator (the local optimisation of absolute pose). X: normalised image
 // points; Y: world points.
-struct EPnPEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector3d;
-  using M_t = Rigid3d;
-  static constexpr int kMinNumSamples = 4;
-
-  void Estimate(const std::vector<X_t>& points2D, const std::vector<Y_t>& points3D,
-                std::vector<M_t>* cams_from_world) const {
-    SolveEPnP(points2D, points3D, cams_from_world);
-  }
-  void Residuals(const std::vector<X_t>& points2D, const std::vector<Y_t>& points3D,
-                 const M_t& cam_from_world, std::vector<double>* squared_residuals) const {
-    ComputeSquaredReprojectionErrors(points2D, points3D, cam_from_world, squared_residuals);
-  }
-};
+using EPnPEstimator = SolverEstimator<Eigen::Vector2d, Eigen::Vector3d, Rigid3d, 4, SolveEPnP,
+                                      ComputeSquaredReprojectionErrors>;
 
 }  // namespace parallax

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "parallax/geometry/epipolar.h"
+#include "parallax/estimators/solvers/solver_estimator.h"
 
 namespace parallax {
 
@@ -30,37 +31,13 @@ void EstimateEssentialMatrixEightPoint(const std::vector<Eigen::Vector2d>& point
 
 // LO-RANSAC estimators (optim/ransac.h); residuals are squared Sampson errors in normalised
 // units (a pixel threshold divided by the focal length).
-struct EssentialMatrixFivePointEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector2d;
-  using M_t = Eigen::Matrix3d;
-  static constexpr int kMinNumSamples = 5;
-
-  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
-                std::vector<M_t>* models) const {
-    EstimateEssentialMatrixFivePoint(points1, points2, models);
-  }
-  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2, const M_t& E,
-                 std::vector<double>* squared_residuals) const {
-    ComputeSquaredSampsonError(points1, points2, E, squared_residuals);
-  }
-};
+using EssentialMatrixFivePointEstimator =
+    SolverEstimator<Eigen::Vector2d, Eigen::Vector2d, Eigen::Matrix3d, 5,
+                    EstimateEssentialMatrixFivePoint, ComputeSquaredSampsonError>;
 
 // Least squares on all given points: the local (LO) estimator that refits E on the inliers.
-struct EssentialMatrixEightPointEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector2d;
-  using M_t = Eigen::Matrix3d;
-  static constexpr int kMinNumSamples = 8;
-
-  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
-                std::vector<M_t>* models) const {
-    EstimateEssentialMatrixEightPoint(points1, points2, models);
-  }
-  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2, const M_t& E,
-                 std::vector<double>* squared_residuals) const {
-    ComputeSquaredSampsonError(points1, points2, E, squared_residuals);
-  }
-};
+using EssentialMatrixEightPointEstimator =
+    SolverEstimator<Eigen::Vector2d, Eigen::Vector2d, Eigen::Matrix3d, 8,
+                    EstimateEssentialMatrixEightPoint, ComputeSquaredSampsonError>;
 
 }  // namespace parallax

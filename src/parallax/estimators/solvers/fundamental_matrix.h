@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "parallax/geometry/epipolar.h"
+#include "parallax/estimators/solvers/solver_estimator.h"
 
 namespace parallax {
 
@@ -43,37 +44,13 @@ void EstimateFundamentalMatrixEightPoint(const std::vector<Eigen::Vector2d>& poi
                                          std::vector<Eigen::Matrix3d>* models);
 
 // LO-RANSAC estimators (optim/ransac.h); residuals are squared Sampson errors in pixels^2.
-struct FundamentalMatrixSevenPointEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector2d;
-  using M_t = Eigen::Matrix3d;
-  static constexpr int kMinNumSamples = 7;
-
-  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
-                std::vector<M_t>* models) const {
-    EstimateFundamentalMatrixSevenPoint(points1, points2, models);
-  }
-  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2, const M_t& F,
-                 std::vector<double>* squared_residuals) const {
-    ComputeSquaredSampsonError(points1, points2, F, squared_residuals);
-  }
-};
+using FundamentalMatrixSevenPointEstimator =
+    SolverEstimator<Eigen::Vector2d, Eigen::Vector2d, Eigen::Matrix3d, 7,
+                    EstimateFundamentalMatrixSevenPoint, ComputeSquaredSampsonError>;
 
 // Least squares on all given points: the local (LO) estimator that refits F on the inliers.
-struct FundamentalMatrixEightPointEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector2d;
-  using M_t = Eigen::Matrix3d;
-  static constexpr int kMinNumSamples = 8;
-
-  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
-                std::vector<M_t>* models) const {
-    EstimateFundamentalMatrixEightPoint(points1, points2, models);
-  }
-  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2, const M_t& F,
-                 std::vector<double>* squared_residuals) const {
-    ComputeSquaredSampsonError(points1, points2, F, squared_residuals);
-  }
-};
+using FundamentalMatrixEightPointEstimator =
+    SolverEstimator<Eigen::Vector2d, Eigen::Vector2d, Eigen::Matrix3d, 8,
+                    EstimateFundamentalMatrixEightPoint, ComputeSquaredSampsonError>;
 
 }  // namespace parallax

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "parallax/geometry/epipolar.h"
+#include "parallax/estimators/solvers/solver_estimator.h"
 
 namespace parallax {
 
@@ -20,20 +21,8 @@ void EstimateHomographyMatrix(const std::vector<Eigen::Vector2d>& points1,
 
 // LO-RANSAC estimator (optim/ransac.h), minimal with 4 points and least squares with more (also
 // the local estimator); residuals are squared transfer errors ||x2 - H x1||^2 in pixels^2.
-struct HomographyMatrixEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector2d;
-  using M_t = Eigen::Matrix3d;
-  static constexpr int kMinNumSamples = 4;
-
-  void Estimate(const std::vector<X_t>& points1, const std::vector<Y_t>& points2,
-                std::vector<M_t>* models) const {
-    EstimateHomographyMatrix(points1, points2, models);
-  }
-  void Residuals(const std::vector<X_t>& points1, const std::vector<Y_t>& points2, const M_t& H,
-                 std::vector<double>* squared_residuals) const {
-    ComputeSquaredHomographyError(points1, points2, H, squared_residuals);
-  }
-};
+using HomographyMatrixEstimator =
+    SolverEstimator<Eigen::Vector2d, Eigen::Vector2d, Eigen::Matrix3d, 4, EstimateHomographyMatrix,
+                    ComputeSquaredHomographyError>;
 
 }  // namespace parallax

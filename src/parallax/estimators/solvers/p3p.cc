@@ -281,8 +281,9 @@ void ComputeSquaredReprojectionErrors(const std::vector<Eigen::Vector2d>& points
   }
 }
 
-void P3PEstimator::Estimate(const std::vector<X_t>& points2D, const std::vector<Y_t>& points3D,
-                            std::vector<M_t>* cams_from_world) const {
+void SolveP3PFromFirstThree(const std::vector<Eigen::Vector2d>& points2D,
+                            const std::vector<Eigen::Vector3d>& points3D,
+                            std::vector<Rigid3d>* cams_from_world) {
   SolveP3P({points2D[0].homogeneous(), points2D[1].homogeneous(), points2D[2].homogeneous()},
            {points3D[0], points3D[1], points3D[2]}, cams_from_world);
 }

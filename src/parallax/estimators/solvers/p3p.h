@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "parallax/geometry/rigid3.h"
+#include "parallax/estimators/solvers/solver_estimator.h"
 
 namespace parallax {
 
@@ -32,20 +33,14 @@ void ComputeSquaredReprojectionErrors(const std::vector<Eigen::Vector2d>& points
                                       const Rigid3d& cam_from_world,
                                       std::vector<double>* squared_errors);
 
-// RANSAC estimator (optim/ransac.h) for calibrated absolute pose from minimal samples.
-// X: normalised image points (u, v) with z = 1; Y: world points.
-struct P3PEstimator {
-  using X_t = Eigen::Vector2d;
-  using Y_t = Eigen::Vector3d;
-  using M_t = Rigid3d;
-  static constexpr int kMinNumSamples = 3;
+// P3P on the first three correspondences: normalised image points (u, v) with z = 1, and
+// world points.
+void SolveP3PFromFirstThree(const std::vector<Eigen::Vector2d>& points2D,
+                            const std::vector<Eigen::Vector3d>& points3D,
+                            std::vector<Rigid3d>* cams_from_world);
 
-  void Estimate(const std::vector<X_t>& points2D, const std::vector<Y_t>& points3D,
-                std::vector<M_t>* cams_from_world) const;
-  void Residuals(const std::vector<X_t>& points2D, const std::vector<Y_t>& points3D,
-                 const M_t& cam_from_world, std::vector<double>* squared_residuals) const {
-    ComputeSquaredReprojectionErrors(points2D, points3D, cam_from_world, squared_residuals);
-  }
-};
+// RANSAC estimator (optim/ransac.h) for calibrated absolute pose from minimal samples.
+using P3PEstimator = SolverEstimator<Eigen::Vector2d, Eigen::Vector3d, Rigid3d, 3, SolveP3PFromFirstThree,
+                                     ComputeSquaredReprojectionErrors>;
 
 }  // namespace parallax
