@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <cmath>
 #include <limits>
 
@@ -10,6 +12,8 @@
 
 namespace parallax {
 namespace {
+
+using test::Rigid3dNear;
 
 struct Scene {
   Camera camera;
@@ -121,9 +125,8 @@ TEST(EstimateAbsolutePose, ExactCorrespondences) {
         EstimateAbsolutePose(scene.camera, scene.points2D, scene.points3D, {});
     ASSERT_TRUE(report.success);
     EXPECT_EQ(report.num_inliers, 100u);
-    EXPECT_LT(report.cam_from_world.rotation.angularDistance(scene.cam_from_world.rotation), 1e-8);
-    EXPECT_LT((report.cam_from_world.translation - scene.cam_from_world.translation).norm(),
-              1e-8 * scene.cam_from_world.translation.norm());
+    EXPECT_THAT(report.cam_from_world, Rigid3dNear(scene.cam_from_world, 1e-8,
+                                                   1e-8 * scene.cam_from_world.translation.norm()));
   }
 }
 

@@ -2,12 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <limits>
 
 #include "parallax/math/random.h"
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 Sim3d RandomSim3d() {
   const Eigen::Vector3d axis(RandomUniformReal(-1, 1), RandomUniformReal(-1, 1),
@@ -35,7 +39,7 @@ TEST(EstimateSim3dRansac, ExactCorrespondences) {
   EXPECT_EQ(report.num_inliers, 20u);
   EXPECT_NEAR(report.dst_from_src.scale, truth.scale, 1e-8 * truth.scale);
   EXPECT_LT(report.dst_from_src.rotation.angularDistance(truth.rotation), 1e-8);
-  EXPECT_LT((report.dst_from_src.translation - truth.translation).norm(), 1e-8 * 10);
+  EXPECT_THAT(report.dst_from_src.translation, EigenMatrixNear(truth.translation, 1e-8 * 10));
 }
 
 TEST(EstimateSim3dRansac, OneWildlyWrongCorrespondenceAmongTwenty) {
@@ -55,7 +59,7 @@ TEST(EstimateSim3dRansac, OneWildlyWrongCorrespondenceAmongTwenty) {
     EXPECT_FALSE(report.inlier_mask[bad]);
     EXPECT_NEAR(report.dst_from_src.scale, truth.scale, 1e-3 * truth.scale);
     EXPECT_LT(report.dst_from_src.rotation.angularDistance(truth.rotation), 1e-3);
-    EXPECT_LT((report.dst_from_src.translation - truth.translation).norm(), 1e-2);
+    EXPECT_THAT(report.dst_from_src.translation, EigenMatrixNear(truth.translation, 1e-2));
   }
 }
 

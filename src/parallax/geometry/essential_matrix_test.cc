@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <Eigen/Dense>
 #include <cmath>
 #include <limits>
@@ -10,6 +12,8 @@
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 Eigen::Vector3d RandomUnitVector() {
   return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
@@ -92,7 +96,7 @@ TEST(EssentialMatrix, DecompositionContainsTruePose) {
     DecomposeEssentialMatrix(E, &R1, &R2, &t);
     EXPECT_NEAR(R1.determinant(), 1.0, 1e-12);
     EXPECT_NEAR(R2.determinant(), 1.0, 1e-12);
-    EXPECT_LT((R1.transpose() * R1 - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+    EXPECT_THAT(R1.transpose() * R1, EigenMatrixNear(Eigen::Matrix3d::Identity(), 1e-12));
     EXPECT_NEAR(t.norm(), 1.0, 1e-12);
     EXPECT_LT(std::min((R1 - R_true).norm(), (R2 - R_true).norm()), 1e-10);
     EXPECT_LT(std::min((t - t_true).norm(), (t + t_true).norm()), 1e-10);
@@ -115,12 +119,12 @@ TEST(EssentialMatrix, PoseFromEssentialMatrixRecoversExactPose) {
     EXPECT_LT(
         (estimated.rotation.toRotationMatrix() - cam2_from_cam1.rotation.toRotationMatrix()).norm(),
         1e-8);
-    EXPECT_LT((estimated.translation - cam2_from_cam1.translation.normalized()).norm(), 1e-8);
+    EXPECT_THAT(estimated.translation, EigenMatrixNear(cam2_from_cam1.translation.normalized(), 1e-8));
     // Every point passes cheirality and comes back at the unit-baseline scale.
     ASSERT_EQ(points3D.size(), points.size());
     const double scale = 1.0 / cam2_from_cam1.translation.norm();
     for (size_t i = 0; i < points.size(); ++i) {
-      EXPECT_LT((points3D[i] - scale * points[i]).norm(), 1e-8 * scale * points[i].norm());
+      EXPECT_THAT(points3D[i], EigenMatrixNear(scale * points[i], 1e-8 * scale * points[i].norm()));
     }
   }
 }

@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 TEST(Gps, EcefOfKnownPoints) {
   // On the equator at the prime meridian the ECEF x is the semi-major axis.
@@ -43,7 +47,7 @@ TEST(Gps, EnuIsMetresEastNorthUp) {
   EXPECT_LT(east.x(), 21.4);
   EXPECT_NEAR(EnuFromGeodetic({46.5, 6.6, 450.0}, origin).z(), 50.0, 1e-6);
   const Eigen::Vector3d enu(123.4, -567.8, 42.0);
-  EXPECT_LT((EnuFromGeodetic(GeodeticFromEnu(enu, origin), origin) - enu).norm(), 1e-6);
+  EXPECT_THAT(EnuFromGeodetic(GeodeticFromEnu(enu, origin), origin), EigenMatrixNear(enu, 1e-6));
 }
 
 }  // namespace

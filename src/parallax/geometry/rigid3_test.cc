@@ -2,10 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include "parallax/geometry/sim3.h"
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 Rigid3d RandomRigid(double angle, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
   return Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized())), t);
@@ -16,10 +20,10 @@ TEST(Rigid3d, ComposeAndInverse) {
   const Rigid3d c_from_b = RandomRigid(-1.1, {0, 1, -1}, {0.2, 0.1, 4});
   const Eigen::Vector3d x_a(0.7, -0.4, 2.0);
   const Rigid3d c_from_a = c_from_b * b_from_a;
-  EXPECT_LT((c_from_a * x_a - c_from_b * (b_from_a * x_a)).norm(), 1e-12);
-  EXPECT_LT((b_from_a.Inverse() * (b_from_a * x_a) - x_a).norm(), 1e-12);
+  EXPECT_THAT(c_from_a * x_a, EigenMatrixNear(c_from_b * (b_from_a * x_a), 1e-12));
+  EXPECT_THAT(b_from_a.Inverse() * (b_from_a * x_a), EigenMatrixNear(x_a, 1e-12));
   const Matrix3x4d matrix = c_from_a.ToMatrix();
-  EXPECT_LT((matrix * x_a.homogeneous() - c_from_a * x_a).norm(), 1e-12);
+  EXPECT_THAT(matrix * x_a.homogeneous(), EigenMatrixNear(c_from_a * x_a, 1e-12));
 }
 
 TEST(Rigid3d, ProjectionCenterMapsToOrigin) {
@@ -41,8 +45,8 @@ TEST(Sim3d, TransformCameraPoseKeepsProjections) {
   const Eigen::Vector3d x_a(0.3, 0.1, 1.0);
   const Eigen::Vector3d in_cam_a = cam_from_a * x_a;
   const Eigen::Vector3d in_cam_b = cam_from_b * (b_from_a * x_a);
-  EXPECT_LT((in_cam_a.hnormalized() - in_cam_b.hnormalized()).norm(), 1e-12);
-  EXPECT_LT(((b_from_a.Inverse() * (b_from_a * x_a)) - x_a).norm(), 1e-12);
+  EXPECT_THAT(in_cam_a.hnormalized(), EigenMatrixNear(in_cam_b.hnormalized(), 1e-12));
+  EXPECT_THAT((b_from_a.Inverse() * (b_from_a * x_a)), EigenMatrixNear(x_a, 1e-12));
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <limits>
 
 #include "parallax/math/random.h"
@@ -9,6 +11,8 @@
 
 namespace parallax {
 namespace {
+
+using test::Sim3dNear;
 
 Sim3d RandomSim3d() {
   const Eigen::Vector3d axis(RandomUniformReal(-1, 1), RandomUniformReal(-1, 1),
@@ -28,13 +32,6 @@ std::vector<Eigen::Vector3d> RandomPoints(size_t num_points) {
   return points;
 }
 
-void ExpectSim3dNear(const Sim3d& actual, const Sim3d& expected, double tolerance) {
-  EXPECT_NEAR(actual.scale, expected.scale, tolerance * expected.scale);
-  EXPECT_LT(actual.rotation.angularDistance(expected.rotation), tolerance);
-  EXPECT_LT((actual.translation - expected.translation).norm(),
-            tolerance * std::max(1.0, expected.translation.norm()));
-}
-
 TEST(EstimateSim3d, RecoversExactSimilarity) {
   for (int trial = 0; trial < 50; ++trial) {
     const Sim3d truth = RandomSim3d();
@@ -44,7 +41,7 @@ TEST(EstimateSim3d, RecoversExactSimilarity) {
     for (const auto& point : src) dst.push_back(truth * point);
     const std::optional<Sim3d> estimate = EstimateSim3d(src, dst);
     ASSERT_TRUE(estimate.has_value());
-    ExpectSim3dNear(*estimate, truth, 1e-8);
+    EXPECT_THAT(*estimate, Sim3dNear(truth, 1e-8));
   }
 }
 
@@ -56,7 +53,7 @@ TEST(EstimateSim3d, RecoversExactSimilarityOfPlanarPoints) {
   for (const auto& point : src) dst.push_back(truth * point);
   const std::optional<Sim3d> estimate = EstimateSim3d(src, dst);
   ASSERT_TRUE(estimate.has_value());
-  ExpectSim3dNear(*estimate, truth, 1e-8);
+  EXPECT_THAT(*estimate, Sim3dNear(truth, 1e-8));
 }
 
 TEST(EstimateSim3d, NoisyPointsGiveCloseSimilarity) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
@@ -12,6 +14,8 @@
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 Eigen::Vector3d RandomUnitVector() {
   return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
@@ -45,7 +49,7 @@ TEST(TriangulatePoint, RecoversExactPoints) {
           cam1_from_world.ToMatrix(), cam2_from_world.ToMatrix(),
           (cam1_from_world * point3D).hnormalized(), (cam2_from_world * point3D).hnormalized());
       ASSERT_TRUE(triangulated.has_value());
-      EXPECT_LT((*triangulated - point3D).norm(), 1e-8 * point3D.norm());
+      EXPECT_THAT(*triangulated, EigenMatrixNear(point3D, 1e-8 * point3D.norm()));
     }
   }
 }
@@ -87,7 +91,7 @@ TEST(TriangulateMultiViewPoint, RecoversExactPoints) {
       const std::optional<Eigen::Vector3d> triangulated =
           TriangulateMultiViewPoint(cams_from_world, points);
       ASSERT_TRUE(triangulated.has_value());
-      EXPECT_LT((*triangulated - point3D).norm(), 1e-8 * point3D.norm());
+      EXPECT_THAT(*triangulated, EigenMatrixNear(point3D, 1e-8 * point3D.norm()));
     }
   }
 }
@@ -111,11 +115,11 @@ TEST(TriangulateMultiViewPoint, AgreesWithTwoViewAndAveragesNoise) {
   const auto multi = TriangulateMultiViewPoint(two_cams, two_points);
   const auto pair = TriangulatePoint(two_cams[0], two_cams[1], two_points[0], two_points[1]);
   ASSERT_TRUE(multi && pair);
-  EXPECT_LT((*multi - *pair).norm(), 1e-10);
+  EXPECT_THAT(*multi, EigenMatrixNear(*pair, 1e-10));
   // 1e-3 normalised noise at depth 5 is ~5 mm per view; 30 views average it down.
   const auto averaged = TriangulateMultiViewPoint(cams_from_world, noisy);
   ASSERT_TRUE(averaged);
-  EXPECT_LT((*averaged - point3D).norm(), 3e-3);
+  EXPECT_THAT(*averaged, EigenMatrixNear(point3D, 3e-3));
 }
 
 TEST(TriangulateMultiViewPoint, RefusesBadInput) {

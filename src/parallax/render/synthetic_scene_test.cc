@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -15,6 +17,8 @@
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 using Layout = SyntheticSceneOptions::Layout;
 
@@ -121,14 +125,14 @@ TEST_F(SyntheticSceneTest, WritesImagesAndExactCameras) {
     ASSERT_FALSE(stream.fail()) << lines[i];
     const Image& image = views.GetImage(static_cast<image_t>(i));
     EXPECT_EQ(name, image.name);
-    EXPECT_LT((K - K_expected).norm(), 1e-12);
-    EXPECT_LT((R - image.cam_from_world.rotation.toRotationMatrix()).norm(), 1e-14);
-    EXPECT_LT((t - image.cam_from_world.translation).norm(), 1e-12);
+    EXPECT_THAT(K, EigenMatrixNear(K_expected, 1e-12));
+    EXPECT_THAT(R, EigenMatrixNear(image.cam_from_world.rotation.toRotationMatrix(), 1e-14));
+    EXPECT_THAT(t, EigenMatrixNear(image.cam_from_world.translation, 1e-12));
   }
   std::istringstream k_file(ReadFileToString(dir_ / "K.txt"));
   Eigen::Matrix3d K;
   for (int k = 0; k < 9; ++k) k_file >> K(k / 3, k % 3);
-  EXPECT_LT((K - K_expected).norm(), 1e-12);
+  EXPECT_THAT(K, EigenMatrixNear(K_expected, 1e-12));
 
   // The COLMAP model reads back with the project's reader.
   const Reconstruction gt = ReadReconstruction(dir_ / "gt");
@@ -139,7 +143,7 @@ TEST_F(SyntheticSceneTest, WritesImagesAndExactCameras) {
     const Image& read = gt.GetImage(image_id);
     EXPECT_EQ(read.name, image.name);
     EXPECT_LT(RotationAngleDegrees(read.cam_from_world.rotation, image.cam_from_world.rotation), 1e-9);
-    EXPECT_LT((read.cam_from_world.translation - image.cam_from_world.translation).norm(), 1e-12);
+    EXPECT_THAT(read.cam_from_world.translation, EigenMatrixNear(image.cam_from_world.translation, 1e-12));
   }
 
   // The same options write the same bytes.

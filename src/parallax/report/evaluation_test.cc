@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <cmath>
 
 #include "parallax/math/random.h"
@@ -10,6 +12,8 @@
 
 namespace parallax {
 namespace {
+
+using test::Sim3dNear;
 
 Reconstruction SyntheticTruth(int num_images) {
   SyntheticDatasetOptions options;
@@ -38,13 +42,6 @@ Sim3d RandomSim3d() {
   return Sim3d(std::exp(RandomUniformReal(-2, 2)), rotation, translation);
 }
 
-void ExpectSim3dNear(const Sim3d& actual, const Sim3d& expected, double tolerance) {
-  EXPECT_NEAR(actual.scale, expected.scale, tolerance * expected.scale);
-  EXPECT_LT(actual.rotation.angularDistance(expected.rotation), tolerance);
-  EXPECT_LT((actual.translation - expected.translation).norm(),
-            tolerance * std::max(1.0, expected.translation.norm()));
-}
-
 TEST(EvaluateReconstruction, RecoversKnownSimilarityExactly) {
   const Reconstruction truth = SyntheticTruth(12);
   const GroundTruth gt = GroundTruthOf(truth);
@@ -54,7 +51,7 @@ TEST(EvaluateReconstruction, RecoversKnownSimilarityExactly) {
     model.Transform(model_from_gt);
     const EvaluationMetrics metrics = EvaluateReconstruction(model, gt);
     ASSERT_TRUE(metrics.alignment_success);
-    ExpectSim3dNear(metrics.gt_from_model, model_from_gt.Inverse(), 1e-9);
+    EXPECT_THAT(metrics.gt_from_model, Sim3dNear(model_from_gt.Inverse(), 1e-9));
     EXPECT_EQ(metrics.num_gt_images, 12u);
     EXPECT_EQ(metrics.num_registered_in_gt, 12u);
     EXPECT_EQ(metrics.num_alignment_inliers, 12u);
@@ -94,7 +91,7 @@ TEST(EvaluateReconstruction, OneWildCameraDoesNotSkewTheOthers) {
 
   const EvaluationMetrics metrics = EvaluateReconstruction(model, gt);
   ASSERT_TRUE(metrics.alignment_success);
-  ExpectSim3dNear(metrics.gt_from_model, model_from_gt.Inverse(), 1e-9);
+  EXPECT_THAT(metrics.gt_from_model, Sim3dNear(model_from_gt.Inverse(), 1e-9));
   EXPECT_EQ(metrics.num_alignment_inliers, 11u);
   for (const ImageEvaluation& image : metrics.images) {
     if (image.image_id == wild_id) {

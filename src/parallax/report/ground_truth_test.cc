@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <filesystem>
 #include <sstream>
 
@@ -10,6 +12,8 @@
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 // Expects an InputError whose message starts with `prefix` and contains `reason`.
 template <typename Function>
@@ -41,7 +45,7 @@ TEST(MiddleburyGroundTruth, ParsesWindowsLineEndingsAndTrailingSpaces) {
   const Eigen::Matrix3d R = truth.images[1].cam_from_world.rotation.toRotationMatrix();
   Eigen::Matrix3d expected;
   expected << 0, -1, 0, 1, 0, 0, 0, 0, 1;
-  EXPECT_LT((R - expected).norm(), 1e-12);
+  EXPECT_THAT(R, EigenMatrixNear(expected, 1e-12));
   // K [R | t] maps the camera centre to 0.
   const Eigen::Vector3d center = ProjectionCenter(truth.images[1].cam_from_world);
   EXPECT_LT((truth.images[1].cam_from_world * center).norm(), 1e-12);
@@ -87,8 +91,8 @@ TEST(StrechaGroundTruth, ParsesOneCamera) {
   EXPECT_EQ(image.camera.width, 2000u);
   EXPECT_EQ(image.camera.height, 1400u);
   EXPECT_EQ(image.camera.params, (std::vector<double>{2000, 2001, 1000, 700}));
-  EXPECT_LT((ProjectionCenter(image.cam_from_world) - center).norm(), 1e-12);
-  EXPECT_LT((image.cam_from_world.rotation.toRotationMatrix() - world_from_cam.transpose()).norm(), 1e-12);
+  EXPECT_THAT(ProjectionCenter(image.cam_from_world), EigenMatrixNear(center, 1e-12));
+  EXPECT_THAT(image.cam_from_world.rotation.toRotationMatrix(), EigenMatrixNear(world_from_cam.transpose(), 1e-12));
 }
 
 TEST(StrechaGroundTruth, RejectsMalformedFiles) {

@@ -1,6 +1,8 @@
 #include "parallax/scene/database.h"
 
 #include <gtest/gtest.h>
+
+#include "parallax/util/eigen_matchers.h"
 #include <signal.h>
 #include <sqlite3.h>
 #include <sys/wait.h>
@@ -18,6 +20,9 @@
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
+using test::Rigid3dNear;
 
 namespace fs = std::filesystem;
 
@@ -85,11 +90,10 @@ void ExpectKeypointsEqual(const FeatureKeypoints& a, const FeatureKeypoints& b) 
 
 void ExpectGeometryNear(const TwoViewGeometry& a, const TwoViewGeometry& b) {
   EXPECT_EQ(a.config, b.config);
-  EXPECT_TRUE(a.F.isApprox(b.F, 1e-12));
-  EXPECT_TRUE(a.E.isApprox(b.E, 1e-12));
-  EXPECT_TRUE(a.H.isApprox(b.H, 1e-12));
-  EXPECT_LT(a.cam2_from_cam1.rotation.angularDistance(b.cam2_from_cam1.rotation), 1e-12);
-  EXPECT_TRUE(a.cam2_from_cam1.translation.isApprox(b.cam2_from_cam1.translation, 1e-12));
+  EXPECT_THAT(a.F, EigenMatrixNear(b.F, 1e-12));
+  EXPECT_THAT(a.E, EigenMatrixNear(b.E, 1e-12));
+  EXPECT_THAT(a.H, EigenMatrixNear(b.H, 1e-12));
+  EXPECT_THAT(a.cam2_from_cam1, Rigid3dNear(b.cam2_from_cam1, 1e-12, 1e-12));
   EXPECT_EQ(a.inlier_matches, b.inlier_matches);
 }
 

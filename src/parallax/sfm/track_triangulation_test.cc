@@ -2,11 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include "parallax/scene/synthetic_dataset.h"
 #include "parallax/sfm/testing/synthetic_mapper_input.h"
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 // A ring of exact views and the mapper's input for it; `model` holds every image with its
 // true pose, the first `num_registered` registered, and no points yet.
@@ -63,7 +67,7 @@ TEST_F(TrackTriangulationTest, ExactViewsGiveTheTruePoint) {
   const point3D_t point3D_id = TriangulateTrack(TrackTriangulationOptions(), track_id, &tracked);
   ASSERT_NE(point3D_id, kInvalidPoint3DId);
   EXPECT_EQ(tracked.PointOfTrack(track_id), point3D_id);
-  EXPECT_LT((model_.GetPoint3D(point3D_id).xyz - TruePoint(track_id)).norm(), 1e-9);
+  EXPECT_THAT(model_.GetPoint3D(point3D_id).xyz, EigenMatrixNear(TruePoint(track_id), 1e-9));
   // Only registered views join the point.
   for (const TrackElement& element : model_.GetPoint3D(point3D_id).track.elements) {
     EXPECT_LE(element.image_id, 4u);
@@ -81,7 +85,7 @@ TEST_F(TrackTriangulationTest, AViewThatDisagreesIsLeftOut) {
   const Point3D& point = model_.GetPoint3D(point3D_id);
   EXPECT_EQ(point.track.Length(), 3u);
   for (const TrackElement& element : point.track.elements) EXPECT_FALSE(element == moved);
-  EXPECT_LT((point.xyz - TruePoint(track_id)).norm(), 1e-9);
+  EXPECT_THAT(point.xyz, EigenMatrixNear(TruePoint(track_id), 1e-9));
 }
 
 TEST_F(TrackTriangulationTest, TooSmallAnAngleGivesNoPoint) {

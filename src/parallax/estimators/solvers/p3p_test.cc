@@ -2,12 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include "parallax/util/eigen_matchers.h"
+
 #include <limits>
 
 #include "parallax/math/random.h"
 
 namespace parallax {
 namespace {
+
+using test::EigenMatrixNear;
 
 Rigid3d RandomCamFromWorld() {
   const Eigen::Vector3d axis(RandomUniformReal(-1, 1), RandomUniformReal(-1, 1),
@@ -61,7 +65,7 @@ TEST(SolveP3P, RecoversExactPoseAmongCandidates) {
       for (int i = 0; i < 3; ++i) {
         const Eigen::Vector3d point_in_cam = candidate * points[i];
         EXPECT_GT(point_in_cam.z(), 0);
-        EXPECT_LT((point_in_cam.normalized() - rays[i].normalized()).norm(), 1e-6);
+        EXPECT_THAT(point_in_cam.normalized(), EigenMatrixNear(rays[i].normalized(), 1e-6));
       }
     }
   }
