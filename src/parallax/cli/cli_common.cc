@@ -1,5 +1,7 @@
 #include "parallax/cli/cli_common.h"
 
+#include "parallax/util/check.h"
+
 #include <algorithm>
 #include <cctype>
 #include <csignal>
@@ -52,6 +54,10 @@ int RunCommand(CLI::App& app, int argc, char** argv, const VerbosityFlags& flags
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     return app.exit(error);
+  } catch (const InputError& error) {
+    // A flag's value that its conversion refuses (--camera-params with a non-number).
+    std::cerr << "error: " << error.what() << std::endl;
+    return 1;
   }
   if (flags.quiet) SetLogLevel(LogLevel::kWarning);
   if (flags.verbose) SetLogLevel(LogLevel::kDebug);

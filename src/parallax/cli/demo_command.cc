@@ -6,8 +6,6 @@
 #include "parallax/pipeline/reconstruction_pipeline.h"
 #include "parallax/render/synthetic_scene.h"
 #include "parallax/report/evaluation.h"
-#include "parallax/report/ground_truth.h"
-#include "parallax/report/html_report.h"
 #include "parallax/util/file.h"
 #include "parallax/util/timer.h"
 
@@ -41,6 +39,9 @@ int RunDemo(int argc, char** argv) {
     ReconstructionPipelineOptions options;
     options.extraction.camera.intrinsics_path = scene_dir / "K.txt";
     options.extraction.camera.single_camera = true;
+    options.ground_truth_path = scene_dir / (scene.name + "_par.txt");
+    options.write_report = true;
+    options.report_title = "Parallax demo: synthetic temple, " + std::to_string(scene.num_views) + " views";
     options.matching.geometry.ransac.random_seed = scene.seed;
     options.mapping.mapper.absolute_pose.ransac.random_seed = scene.seed;
     const ReconstructionPipelineResult result =
@@ -50,27 +51,12 @@ int RunDemo(int argc, char** argv) {
                 << result.mapping.summary.failure << std::endl;
       return 1;
     }
-    const Reconstruction& model = result.mapping.models.front();
-    const GroundTruth truth = ReadGroundTruth(scene_dir / (scene.name + "_par.txt"));
-    const EvaluationMetrics metrics = EvaluateReconstruction(model, truth, {});
-
-    Database database(output / "reconstruction" / "database.db");
-    HtmlReportInputs inputs;
-    inputs.title = "Parallax demo: synthetic temple, " + std::to_string(scene.num_views) + " views";
-    inputs.reconstruction = &model;
-    inputs.database = &database;
-    inputs.image_dir = scene_dir;
-    inputs.summary = result.summary;
-    inputs.evaluation = metrics;
-    const std::filesystem::path report_path = output / "reconstruction" / "report.html";
-    WriteHtmlReport(inputs, report_path);
-
-    std::cout << MetricsToText(metrics) << "\n";
+    std::cout << MetricsToText(*result.evaluation) << "\n";
     std::cout << std::fixed << std::setprecision(2) << "demo: rendered " << scene.num_views
               << " views in " << synth_seconds << " s; reconstructed in "
               << result.summary["timings_s"]["total"].get<double>() << " s; total "
               << total_timer.ElapsedSeconds() << " s\n"
-              << "demo: report " << report_path.string() << std::endl;
+              << "demo: report " << result.report_path.string() << std::endl;
     return 0;
   });
 }

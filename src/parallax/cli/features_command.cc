@@ -3,7 +3,7 @@
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/cli/pipeline_options_cli.h"
-#include "parallax/pipeline/feature_extraction.h"
+#include "parallax/pipeline/extraction_stage.h"
 #include "parallax/util/check.h"
 #include "parallax/util/run_lock.h"
 
@@ -13,21 +13,19 @@ int RunFeatures(int argc, char** argv) {
   CLI::App app("Detect SIFT features in a folder of images and store them in a database",
                "parallax features");
   std::string image_dir, database_path;
-  FeatureExtractionOptions options;
-  ExtractionFlags extraction_flags;
+  ExtractionStageOptions options;
   app.add_option("--images", image_dir, "Folder of images (not recursive)")->required();
   app.add_option("--database", database_path, "Database to create or resume (COLMAP format)")
       ->required();
-  extraction_flags.Add(app, &options);
+  AddExtractionOptions(app, &options);
   app.add_option("--threads", options.num_threads, "Worker threads (-1: all cores)")
       ->capture_default_str();
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    extraction_flags.Apply(&options);
     Database database(database_path);
     const RunLock lock(DatabaseLockPath(database_path), database_path);
-    const FeatureExtractionStats stats = ExtractFeatures(options, image_dir, &database);
+    const ExtractionStageResult stats = RunExtractionStage(options, image_dir, &database);
     if (stats.num_images_found == 0) throw InputError(image_dir + ": no images found");
     std::cout << "features: " << stats.num_images_found << " images, " << stats.num_extracted
               << " extracted, " << stats.num_skipped << " already in the database, "

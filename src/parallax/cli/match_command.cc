@@ -5,7 +5,7 @@
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/cli/pipeline_options_cli.h"
-#include "parallax/pipeline/feature_matching.h"
+#include "parallax/pipeline/matching_stage.h"
 #include "parallax/pipeline/run_summary.h"
 #include "parallax/util/check.h"
 #include "parallax/util/run_lock.h"
@@ -68,12 +68,11 @@ int RunMatch(int argc, char** argv) {
   CLI::App app("Match features between image pairs and verify them geometrically",
                "parallax match");
   std::string database_path;
-  FeatureMatchingPipelineOptions options;
-  MatchingFlags matching_flags;
+  MatchingStageOptions options;
   bool print_stats = false;
   app.add_option("--database", database_path, "Database with features (parallax features)")
       ->required();
-  matching_flags.Add(app, &options);
+  AddMatchingOptions(app, &options);
   app.add_option("--threads", options.num_threads, "Worker threads (-1: all cores)")
       ->capture_default_str();
   app.add_flag("--stats", print_stats,
@@ -83,13 +82,12 @@ int RunMatch(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    matching_flags.Apply(&options);
     if (!std::filesystem::exists(database_path)) {
       throw InputError(database_path + ": database does not exist (run parallax features)");
     }
     Database database(database_path);
     const RunLock lock(DatabaseLockPath(database_path), database_path);
-    const FeatureMatchingStats stats = MatchAndVerify(options, &database);
+    const MatchingStageResult stats = RunMatchingStage(options, &database);
     if (print_stats) {
       PrintStatsTables(database);
       std::cout << MatchingSummary(stats).dump(2) << "\n";

@@ -4,12 +4,14 @@
 
 namespace parallax::cli {
 
-void ExtractionFlags::Add(CLI::App& app, FeatureExtractionOptions* options) {
+void AddExtractionOptions(CLI::App& app, ExtractionStageOptions* options) {
   app.add_option("--camera-model", options->camera.camera_model,
                  "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV (default: "
                  "SIMPLE_RADIAL, or PINHOLE with known intrinsics)");
-  auto* params_option = app.add_option("--camera-params", camera_params_,
-                                       "Intrinsics in the model's order, e.g. fx,fy,cx,cy");
+  auto* params_option = app.add_option_function<std::string>(
+      "--camera-params",
+      [options](const std::string& text) { options->camera.camera_params = ParseCameraParams(text); },
+      "Intrinsics in the model's order, e.g. fx,fy,cx,cy");
   auto* intrinsics_option = app.add_option("--intrinsics", options->camera.intrinsics_path,
                                            "Text file with the 3x3 calibration matrix K")
                                 ->excludes(params_option);
@@ -53,21 +55,18 @@ void ExtractionFlags::Add(CLI::App& app, FeatureExtractionOptions* options) {
   app.add_option("--sift-edge", options->sift.edge_threshold, "SIFT edge threshold")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_flag("--no-root-sift", no_root_sift_, "Plain L2-normalised SIFT instead of RootSIFT");
+  app.add_flag("!--no-root-sift", options->sift.root_sift,
+               "Plain L2-normalised SIFT instead of RootSIFT");
 }
 
-void ExtractionFlags::Apply(FeatureExtractionOptions* options) const {
-  if (!camera_params_.empty()) options->camera.camera_params = ParseCameraParams(camera_params_);
-  if (no_root_sift_) options->sift.root_sift = false;
-}
-
-void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) {
+void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
   PairSelectionOptions& pairs = options->pairs;
-  app.add_option("--pairs", pair_mode_,
-                 "Which pairs to match: auto (exhaustive up to --auto-exhaustive-max-images, "
-                 "retrieval above, plus spatial when images have GPS), exhaustive, sequential "
-                 "(name order), retrieval (vocabulary tree) or spatial (EXIF GPS neighbours)")
-      ->capture_default_str()
+  app.add_option_function<std::string>(
+         "--pairs", [&pairs](const std::string& name) { pairs.mode = *PairModeFromName(name); },
+         "Which pairs to match: auto (exhaustive up to --auto-exhaustive-max-images, "
+         "retrieval above, plus spatial when images have GPS), exhaustive, sequential "
+         "(name order), retrieval (vocabulary tree) or spatial (EXIF GPS neighbours)")
+      ->default_str("auto")
       ->check(CLI::IsMember({"auto", "exhaustive", "sequential", "retrieval", "spatial"}));
   app.add_option("--auto-exhaustive-max-images", pairs.auto_exhaustive_max_images,
                  "Auto mode: match every pair up to this many images")
@@ -127,16 +126,11 @@ void MatchingFlags::Add(CLI::App& app, FeatureMatchingPipelineOptions* options) 
   app.add_option("--ratio", options->matching.max_ratio, "Lowe's ratio test threshold")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  app.add_flag("--no-cross-check", no_cross_check_, "Keep matches that are not mutual");
+  app.add_flag("!--no-cross-check", options->matching.cross_check, "Keep matches that are not mutual");
   app.add_option("--max-error", options->geometry.ransac.max_error,
                  "Geometric verification RANSAC threshold, pixels")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-}
-
-void MatchingFlags::Apply(FeatureMatchingPipelineOptions* options) const {
-  options->pairs.mode = *PairModeFromName(pair_mode_);
-  if (no_cross_check_) options->matching.cross_check = false;
 }
 
 }  // namespace parallax::cli

@@ -3,32 +3,15 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "parallax/pipeline/feature_extraction.h"
-#include "parallax/pipeline/feature_matching.h"
+#include "parallax/pipeline/extraction_stage.h"
+#include "parallax/pipeline/matching_stage.h"
 
 namespace parallax::cli {
 
-// Flags of the feature-extraction stage, shared by `features` and `reconstruct`. Call
-// Apply() after parsing to convert the textual flags.
-class ExtractionFlags {
- public:
-  void Add(CLI::App& app, FeatureExtractionOptions* options);
-  void Apply(FeatureExtractionOptions* options) const;
-
- private:
-  std::string camera_params_;
-  bool no_root_sift_ = false;
-};
-
-// Flags of the matching and verification stages, shared by `match` and `reconstruct`.
-class MatchingFlags {
- public:
-  void Add(CLI::App& app, FeatureMatchingPipelineOptions* options);
-  void Apply(FeatureMatchingPipelineOptions* options) const;
-
- private:
-  std::string pair_mode_ = "auto";
-  bool no_cross_check_ = false;
-};
+// Command-line flags bound straight to the options they set (conversions in the flag's own
+// callback), shared by `features`/`match` and `reconstruct`, as AddMapperOptions is for the
+// mapper's.
+void AddExtractionOptions(CLI::App& app, ExtractionStageOptions* options);
+void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options);
 
 }  // namespace parallax::cli

@@ -5,7 +5,6 @@
 #include "parallax/cli/mapper_options_cli.h"
 #include "parallax/cli/pipeline_options_cli.h"
 #include "parallax/pipeline/reconstruction_pipeline.h"
-#include "parallax/report/html_report.h"
 
 namespace parallax::cli {
 
@@ -15,10 +14,7 @@ int RunReconstruct(int argc, char** argv) {
   std::string image_dir, output_dir, database_path;
   uint64_t seed = 0;
   int num_threads = -1;
-  bool write_report = false;
   ReconstructionPipelineOptions options;
-  ExtractionFlags extraction_flags;
-  MatchingFlags matching_flags;
   app.add_option("--images", image_dir, "Folder of images (not recursive)")->required();
   app.add_option("--output", output_dir,
                  "Output folder: sparse/<k>/, points.ply, summary.json, database.db")
@@ -30,9 +26,9 @@ int RunReconstruct(int argc, char** argv) {
                  "Random seed (same inputs, options and seed: same model; bit for bit with "
                  "--ba-threads 1)")
       ->capture_default_str();
-  app.add_flag("--report", write_report, "Also write OUT/report.html");
-  extraction_flags.Add(app, &options.extraction);
-  matching_flags.Add(app, &options.matching);
+  app.add_flag("--report", options.write_report, "Also write OUT/report.html");
+  AddExtractionOptions(app, &options.extraction);
+  AddMatchingOptions(app, &options.matching);
   AddMapperOptions(app, &options.mapping);
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
@@ -40,8 +36,6 @@ int RunReconstruct(int argc, char** argv) {
     options.matching.geometry.ransac.random_seed = seed;
     options.mapping.mapper.absolute_pose.ransac.random_seed = seed;
     options.mapping.hierarchical.num_threads = num_threads;
-    extraction_flags.Apply(&options.extraction);
-    matching_flags.Apply(&options.matching);
     options.database_path = database_path;
     options.extraction.num_threads = num_threads;
     options.matching.num_threads = num_threads;
@@ -59,18 +53,7 @@ int RunReconstruct(int argc, char** argv) {
                 << result.mapping.summary.failure << std::endl;
       return 1;
     }
-    if (write_report) {
-      const std::filesystem::path out(output_dir);
-      Database database(database_path.empty() ? out / "database.db"
-                                              : std::filesystem::path(database_path));
-      HtmlReportInputs inputs;
-      inputs.reconstruction = &result.mapping.models.front();
-      inputs.database = &database;
-      inputs.image_dir = image_dir;
-      inputs.summary = result.summary;
-      WriteHtmlReport(inputs, out / "report.html");
-      std::cout << "report: " << (out / "report.html").string() << "\n";
-    }
+    if (!result.report_path.empty()) std::cout << "report: " << result.report_path.string() << "\n";
     double total = 0;
     for (const auto& [stage, seconds] : result.timings) {
       std::cout << stage << ": " << seconds << " s\n";

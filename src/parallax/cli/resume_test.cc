@@ -190,7 +190,7 @@ TEST_F(ResumeTest, KilledDuringMatchingResumesWithoutRedoingStoredWork) {
     stored_pairs = database.ReadTwoViewGeometries().size();
   }
   ASSERT_LT(stored_pairs, static_cast<size_t>(kNumPairs));
-  // Pairs are committed in batches (FeatureMatchingPipelineOptions::batch_size): a kill loses
+  // Pairs are committed in batches (MatchingStageOptions::batch_size): a kill loses
   // the batch in progress, so with fewer pairs than a batch none are stored yet.
   std::cout << "killed with " << stored_pairs << " of " << kNumPairs << " pairs stored\n";
 

@@ -184,30 +184,35 @@ ImageCameraInfo ReadImageCameraInfo(const std::filesystem::path& path, size_t wi
   return exif ? ImageCameraInfoFromExif(*exif, width, height, sensor_width_mm) : ImageCameraInfo{};
 }
 
-CameraAssigner::CameraAssigner(const CameraSetupOptions& options, Database* database)
-    : options_(options), database_(database) {
-  options_.Check();
-  PARALLAX_CHECK(database != nullptr);
-  const int num_sources = !options_.intrinsics_path.empty() + !options_.camera_json_path.empty() +
-                          !options_.camera_params.empty();
+CameraSetup LoadCameraSetup(const CameraSetupOptions& options) {
+  options.Check();
+  CameraSetup setup;
+  setup.options = options;
+  const int num_sources = !options.intrinsics_path.empty() + !options.camera_json_path.empty() +
+                          !options.camera_params.empty();
   if (num_sources > 1) {
     throw InputError("--camera, --intrinsics and --camera-params exclude each other");
   }
-  if (!options_.camera_json_path.empty()) {
-    if (!options_.camera_model.empty() && options_.camera_model != "OPENCV") {
-      throw InputError("--camera-model " + options_.camera_model + ": " +
-                       options_.camera_json_path.string() + " holds an OPENCV camera");
+  if (!options.camera_json_path.empty()) {
+    if (!options.camera_model.empty() && options.camera_model != "OPENCV") {
+      throw InputError("--camera-model " + options.camera_model + ": " +
+                       options.camera_json_path.string() + " holds an OPENCV camera");
     }
-    calibrated_camera_ = ReadCameraJson(options_.camera_json_path);
+    setup.calibrated_camera = ReadCameraJson(options.camera_json_path);
   }
-  SelectedCameraModel(options_, false);  // Reject an unknown model before any work.
-  if (!options_.intrinsics_path.empty()) K_ = ReadCalibrationMatrix(options_.intrinsics_path);
+  SelectedCameraModel(options, false);  // Reject an unknown model before any work.
+  if (!options.intrinsics_path.empty()) setup.K = ReadCalibrationMatrix(options.intrinsics_path);
+  // The number and values of --camera-params do not depend on the image size.
+  if (!options.camera_params.empty()) MakeCamera(options, std::nullopt, 640, 480);
+  return setup;
 }
 
-bool CameraAssigner::UsesExif() const {
-  const bool intrinsics_known = K_ || calibrated_camera_ || !options_.camera_params.empty();
-  return !intrinsics_known && options_.use_exif;
+CameraAssigner::CameraAssigner(CameraSetup setup, Database* database)
+    : setup_(std::move(setup)), database_(database) {
+  PARALLAX_CHECK(database != nullptr);
 }
+
+bool CameraAssigner::UsesExif() const { return !setup_.IntrinsicsKnown() && options_.use_exif; }
 
 camera_t CameraAssigner::CameraForImage(const std::string& image_path, size_t width,
                                         size_t height) {
@@ -220,14 +225,14 @@ camera_t CameraAssigner::CameraForImage(const std::string& image_path, size_t wi
 
 camera_t CameraAssigner::CameraForImage(const std::string& image_name, size_t width, size_t height,
                                         const ImageCameraInfo& info) {
-  const bool intrinsics_known = K_ || calibrated_camera_ || !options_.camera_params.empty();
+  const bool intrinsics_known = setup_.IntrinsicsKnown();
   if (info.focal_length_px) {
     PARALLAX_LOG(Debug) << image_name << ": EXIF focal length " << *info.focal_length_px << " px";
   }
   const Camera wanted =
-      calibrated_camera_
-          ? CalibratedCameraForImage(options_, *calibrated_camera_, image_name, width, height)
-          : MakeCamera(options_, K_, width, height,
+      setup_.calibrated_camera
+          ? CalibratedCameraForImage(options_, *setup_.calibrated_camera, image_name, width, height)
+          : MakeCamera(options_, setup_.K, width, height,
                        intrinsics_known ? std::nullopt : info.focal_length_px);
   if (options_.camera_per_image) return database_->WriteCamera(wanted);
 

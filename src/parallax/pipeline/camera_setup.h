@@ -90,11 +90,25 @@ ImageCameraInfo ReadImageCameraInfo(const std::filesystem::path& path, size_t wi
 // share a camera when they have the same size and, when intrinsics are unknown, the same EXIF
 // make, model and focal length. Reuses matching cameras already in the database so a resumed
 // extraction does not duplicate them. Not thread-safe (serialise with the database writes).
+// What the camera options say before any image is read: the known intrinsics (K.txt,
+// camera.json or --camera-params), read and validated. The run's first step; extraction
+// assigns cameras from it.
+struct CameraSetup {
+  CameraSetupOptions options;
+  std::optional<Eigen::Matrix3d> K;         // From options.intrinsics_path.
+  std::optional<Camera> calibrated_camera;  // From options.camera_json_path.
+  // Whether the intrinsics are given (then EXIF is not read).
+  bool IntrinsicsKnown() const { return K || calibrated_camera || !options.camera_params.empty(); }
+};
+
+// Reads K.txt or camera.json and checks the options against each other and against the
+// camera model: two intrinsics sources at once, an unknown model, an unreadable or malformed
+// file, or a wrong number of --camera-params is an InputError naming the file or flag.
+CameraSetup LoadCameraSetup(const CameraSetupOptions& options);
+
 class CameraAssigner {
  public:
-  // Reads K from options.intrinsics_path and the camera from options.camera_json_path if set
-  // (throws InputError). Both at once, or either with camera_params, is an InputError.
-  CameraAssigner(const CameraSetupOptions& options, Database* database);
+  CameraAssigner(CameraSetup setup, Database* database);
   // The camera id for a new image of this size; `image_path` is read for EXIF when intrinsics
   // are unknown and options.use_exif (a missing file is no EXIF). Throws InputError naming
   // `image_path` when single_camera is set and the size differs from the camera's, or when
@@ -111,10 +125,9 @@ class CameraAssigner {
   // Images with equal keys share a camera.
   using CameraKey = std::tuple<size_t, size_t, std::string, std::string, double>;
 
-  CameraSetupOptions options_;
+  const CameraSetup setup_;
+  const CameraSetupOptions& options_ = setup_.options;
   Database* database_;
-  std::optional<Eigen::Matrix3d> K_;
-  std::optional<Camera> calibrated_camera_;
   std::map<CameraKey, camera_t> camera_by_key_;
   std::optional<std::pair<size_t, size_t>> single_camera_size_;
   std::optional<camera_t> single_camera_id_;

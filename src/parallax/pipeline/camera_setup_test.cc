@@ -195,7 +195,7 @@ TEST_F(CameraSetupTest, ExplicitParams) {
 
 TEST_F(CameraSetupTest, OneCameraPerImageSizeByDefault) {
   Database database(dir_ / "database.db");
-  CameraAssigner assigner(CameraSetupOptions(), &database);
+  CameraAssigner assigner(LoadCameraSetup(CameraSetupOptions()), &database);
   const camera_t a = assigner.CameraForImage("a.png", 640, 480);
   const camera_t b = assigner.CameraForImage("b.png", 640, 480);
   const camera_t c = assigner.CameraForImage("c.png", 1280, 960);
@@ -205,13 +205,13 @@ TEST_F(CameraSetupTest, OneCameraPerImageSizeByDefault) {
   EXPECT_EQ(database.ReadCamera(c).params[0], 1.2 * 1280);
 
   // A resumed run reuses the cameras it finds.
-  CameraAssigner resumed(CameraSetupOptions(), &database);
+  CameraAssigner resumed(LoadCameraSetup(CameraSetupOptions()), &database);
   EXPECT_EQ(resumed.CameraForImage("d.png", 1280, 960), c);
   EXPECT_EQ(database.NumCameras(), 2u);
   // Different settings make a different camera.
   CameraSetupOptions pinhole;
   pinhole.camera_model = "PINHOLE";
-  CameraAssigner other(pinhole, &database);
+  CameraAssigner other(LoadCameraSetup(pinhole), &database);
   EXPECT_NE(other.CameraForImage("e.png", 640, 480), a);
   EXPECT_EQ(database.NumCameras(), 3u);
 }
@@ -220,14 +220,14 @@ TEST_F(CameraSetupTest, SingleCameraAndCameraPerImage) {
   Database database(dir_ / "database.db");
   CameraSetupOptions single;
   single.single_camera = true;
-  CameraAssigner single_assigner(single, &database);
+  CameraAssigner single_assigner(LoadCameraSetup(single), &database);
   const camera_t a = single_assigner.CameraForImage("a.png", 640, 480);
   EXPECT_EQ(single_assigner.CameraForImage("b.png", 640, 480), a);
   ExpectInputErrorNaming([&] { single_assigner.CameraForImage("c.png", 641, 480); }, "c.png");
 
   CameraSetupOptions per_image;
   per_image.camera_per_image = true;
-  CameraAssigner per_image_assigner(per_image, &database);
+  CameraAssigner per_image_assigner(LoadCameraSetup(per_image), &database);
   const camera_t d = per_image_assigner.CameraForImage("d.png", 640, 480);
   const camera_t e = per_image_assigner.CameraForImage("e.png", 640, 480);
   EXPECT_NE(d, e);
@@ -235,20 +235,20 @@ TEST_F(CameraSetupTest, SingleCameraAndCameraPerImage) {
 
   CameraSetupOptions both = single;
   both.camera_per_image = true;
-  EXPECT_THROW(CameraAssigner(both, &database), CheckError);
+  EXPECT_THROW(CameraAssigner(LoadCameraSetup(both), &database), CheckError);
 }
 
 TEST_F(CameraSetupTest, AssignerReadsIntrinsicsFile) {
   Database database(dir_ / "database.db");
   CameraSetupOptions options;
   options.intrinsics_path = WriteText("K.txt", "800 0 330\n0 810 250\n0 0 1\n");
-  CameraAssigner assigner(options, &database);
+  CameraAssigner assigner(LoadCameraSetup(options), &database);
   const Camera camera = database.ReadCamera(assigner.CameraForImage("a.png", 640, 480));
   EXPECT_EQ(camera.model_id, CameraModelId::kPinhole);
   EXPECT_EQ(camera.params, (std::vector<double>{800, 810, 330, 250}));
   EXPECT_TRUE(camera.has_prior_focal_length);
   options.intrinsics_path = WriteText("bad.txt", "800 0 330\n");
-  ExpectInputErrorNaming([&] { CameraAssigner(options, &database); },
+  ExpectInputErrorNaming([&] { CameraAssigner(LoadCameraSetup(options), &database); },
                          options.intrinsics_path.string());
 }
 
@@ -266,7 +266,7 @@ TEST_F(CameraSetupTest, CameraJsonGivesFixedOpencvCamera) {
   Database database(dir_ / "database.db");
   CameraSetupOptions options;
   options.camera_json_path = json_path;
-  CameraAssigner assigner(options, &database);
+  CameraAssigner assigner(LoadCameraSetup(options), &database);
   const camera_t a = assigner.CameraForImage("a.jpg", 1280, 960);
   EXPECT_EQ(assigner.CameraForImage("b.jpg", 1280, 960), a);
   const Camera camera = database.ReadCamera(a);
@@ -281,7 +281,7 @@ TEST_F(CameraSetupTest, CameraJsonGivesFixedOpencvCamera) {
 
   // Asked to, bundle adjustment may refine them: no prior.
   options.refine_known_intrinsics = true;
-  CameraAssigner refined(options, &database);
+  CameraAssigner refined(LoadCameraSetup(options), &database);
   const Camera initial = database.ReadCamera(refined.CameraForImage("c.jpg", 1280, 960));
   EXPECT_EQ(initial.params, calibrated.camera.params);
   EXPECT_FALSE(initial.has_prior_focal_length);
@@ -290,16 +290,16 @@ TEST_F(CameraSetupTest, CameraJsonGivesFixedOpencvCamera) {
   // One source of intrinsics at a time, and no other model.
   CameraSetupOptions both = options;
   both.intrinsics_path = WriteText("K.txt", "800 0 330\n0 810 250\n0 0 1\n");
-  EXPECT_THROW(CameraAssigner(both, &database), InputError);
+  EXPECT_THROW(CameraAssigner(LoadCameraSetup(both), &database), InputError);
   CameraSetupOptions with_params = options;
   with_params.camera_params = {1000, 640, 480};
-  EXPECT_THROW(CameraAssigner(with_params, &database), InputError);
+  EXPECT_THROW(CameraAssigner(LoadCameraSetup(with_params), &database), InputError);
   CameraSetupOptions pinhole = options;
   pinhole.camera_model = "PINHOLE";
-  ExpectInputErrorNaming([&] { CameraAssigner(pinhole, &database); }, "--camera-model");
+  ExpectInputErrorNaming([&] { CameraAssigner(LoadCameraSetup(pinhole), &database); }, "--camera-model");
   CameraSetupOptions missing;
   missing.camera_json_path = dir_ / "missing.json";
-  ExpectInputErrorNaming([&] { CameraAssigner(missing, &database); },
+  ExpectInputErrorNaming([&] { CameraAssigner(LoadCameraSetup(missing), &database); },
                          missing.camera_json_path.string());
 }
 
@@ -330,7 +330,7 @@ TEST_F(CameraSetupTest, ExifFocalLengthIsTheInitialFocal) {
   const fs::path plain = WriteText("plain.jpg", JpegBytes(640, 480, std::nullopt));
 
   Database database(dir_ / "database.db");
-  CameraAssigner assigner(CameraSetupOptions(), &database);
+  CameraAssigner assigner(LoadCameraSetup(CameraSetupOptions()), &database);
   const camera_t a = assigner.CameraForImage(exif1.string(), 640, 480);
   EXPECT_EQ(assigner.CameraForImage(exif2.string(), 640, 480), a);
   const Camera camera = database.ReadCamera(a);
@@ -357,7 +357,7 @@ TEST_F(CameraSetupTest, ExifFocalLengthIsTheInitialFocal) {
 
   // A resumed run, seeing images in the same order, finds the same cameras (the database
   // keeps no EXIF, so equal cameras are told apart by order).
-  CameraAssigner resumed(CameraSetupOptions(), &database);
+  CameraAssigner resumed(LoadCameraSetup(CameraSetupOptions()), &database);
   EXPECT_EQ(resumed.CameraForImage(exif2.string(), 640, 480), a);
   EXPECT_EQ(resumed.CameraForImage(zoomed.string(), 640, 480), z);
   EXPECT_EQ(resumed.CameraForImage(other_body.string(), 640, 480), n);
@@ -375,17 +375,17 @@ TEST_F(CameraSetupTest, ExifOverridesAndModes) {
 
   CameraSetupOptions no_exif;
   no_exif.use_exif = false;
-  CameraAssigner ignoring(no_exif, &database);
+  CameraAssigner ignoring(LoadCameraSetup(no_exif), &database);
   const camera_t a = ignoring.CameraForImage(exif_path.string(), 640, 480);
   EXPECT_EQ(ignoring.CameraForImage(plain_path.string(), 640, 480), a);
   EXPECT_DOUBLE_EQ(database.ReadCamera(a).params[0], 1.2 * 640);
 
   CameraSetupOptions sensor;
   sensor.sensor_width_mm = 6.4;
-  CameraAssigner with_sensor(sensor, &database);
+  CameraAssigner with_sensor(LoadCameraSetup(sensor), &database);
   EXPECT_DOUBLE_EQ(
       database.ReadCamera(with_sensor.CameraForImage(mm_path.string(), 640, 480)).params[0], 400.0);
-  CameraAssigner without_sensor(CameraSetupOptions(), &database);
+  CameraAssigner without_sensor(LoadCameraSetup(CameraSetupOptions()), &database);
   EXPECT_DOUBLE_EQ(
       database.ReadCamera(without_sensor.CameraForImage(mm_path.string(), 640, 480)).params[0],
       1.2 * 640);
@@ -394,7 +394,7 @@ TEST_F(CameraSetupTest, ExifOverridesAndModes) {
   CameraSetupOptions known;
   known.camera_params = {1000, 320, 240, 0};
   known.camera_model = "SIMPLE_RADIAL";
-  CameraAssigner with_known(known, &database);
+  CameraAssigner with_known(LoadCameraSetup(known), &database);
   const Camera k = database.ReadCamera(with_known.CameraForImage(exif_path.string(), 640, 480));
   EXPECT_EQ(k.params[0], 1000.0);
   EXPECT_TRUE(k.has_prior_focal_length);
@@ -402,7 +402,7 @@ TEST_F(CameraSetupTest, ExifOverridesAndModes) {
   // --single-camera: all images share the first image's camera, EXIF or not.
   CameraSetupOptions single;
   single.single_camera = true;
-  CameraAssigner single_assigner(single, &database);
+  CameraAssigner single_assigner(LoadCameraSetup(single), &database);
   const camera_t s = single_assigner.CameraForImage(exif_path.string(), 640, 480);
   EXPECT_EQ(single_assigner.CameraForImage(plain_path.string(), 640, 480), s);
   EXPECT_DOUBLE_EQ(database.ReadCamera(s).params[0], 800.0);
@@ -410,7 +410,7 @@ TEST_F(CameraSetupTest, ExifOverridesAndModes) {
   // --camera-per-image: each image its own camera, each with its own EXIF focal length.
   CameraSetupOptions per_image;
   per_image.camera_per_image = true;
-  CameraAssigner per_image_assigner(per_image, &database);
+  CameraAssigner per_image_assigner(LoadCameraSetup(per_image), &database);
   const camera_t e1 = per_image_assigner.CameraForImage(exif_path.string(), 640, 480);
   const camera_t e2 = per_image_assigner.CameraForImage(exif_path.string(), 640, 480);
   EXPECT_NE(e1, e2);

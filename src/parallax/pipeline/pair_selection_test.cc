@@ -6,7 +6,7 @@
 #include <map>
 #include <set>
 
-#include "parallax/pipeline/feature_extraction.h"
+#include "parallax/pipeline/extraction_stage.h"
 #include "parallax/render/synthetic_scene.h"
 #include "parallax/util/check.h"
 #include "parallax/util/test_dir.h"
@@ -95,9 +95,9 @@ class AerialPairSelectionTest : public ::testing::Test {
     scene.num_threads = 2;
     GenerateSyntheticScene(scene, dir_->path() / "images");
     Database database(dir_->path() / "database.db");
-    FeatureExtractionOptions extraction;
+    ExtractionStageOptions extraction;
     extraction.num_threads = 2;
-    ExtractFeatures(extraction, dir_->path() / "images", &database);
+    RunExtractionStage(extraction, dir_->path() / "images", &database);
   }
   static void TearDownTestSuite() {
     delete dir_;

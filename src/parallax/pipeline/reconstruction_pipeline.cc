@@ -1,6 +1,8 @@
 #include "parallax/pipeline/reconstruction_pipeline.h"
 
 #include "parallax/image/image_reader.h"
+#include "parallax/report/ground_truth.h"
+#include "parallax/report/html_report.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
@@ -30,7 +32,8 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   if (num_image_files == 1) {
     throw InputError(image_dir.string() + ": only one image; reconstruction needs at least two");
   }
-  CheckCameraSetup(options.extraction.camera);
+  // 0. Cameras: the intrinsics given, read and checked before anything is written.
+  const CameraSetup cameras = LoadCameraSetup(options.extraction.camera);
   CreateDirectoryOrThrow(output_dir);
   // One run at a time per output folder and per database; a second stops here, before it
   // has written anything.
@@ -43,7 +46,7 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   Timer timer;
 
   // 1. Features.
-  result.extraction = ExtractFeatures(options.extraction, image_dir, &database);
+  result.extraction = RunExtractionStage(options.extraction, cameras, image_dir, &database);
   result.timings.emplace_back("features", timer.ElapsedSeconds());
   PARALLAX_LOG(Info) << "features: " << result.extraction.num_extracted << " images extracted, "
                      << result.extraction.num_skipped << " already stored, "
@@ -56,7 +59,7 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
 
   // 2 + 3. Matching and geometric verification.
   timer.Restart();
-  result.matching = MatchAndVerify(options.matching, &database);
+  result.matching = RunMatchingStage(options.matching, &database);
   result.timings.emplace_back("matching", timer.ElapsedSeconds());
   PARALLAX_LOG(Info) << "matching: " << result.matching.num_matched << " pairs matched, "
                      << result.matching.num_skipped << " already stored, "
@@ -78,6 +81,25 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
                                 {"mean_keypoints", result.extraction.mean_num_keypoints}};
   result.summary["matching"] = MatchingSummary(result.matching);
   WriteRunSummary(result.summary, output_dir / "summary.json");
+
+  // 6. Evaluation and report.
+  const Reconstruction& model = result.mapping.models.front();
+  if (!options.ground_truth_path.empty()) {
+    result.evaluation = EvaluateReconstruction(model, ReadGroundTruth(options.ground_truth_path), {});
+  }
+  if (options.write_report) {
+    timer.Restart();
+    HtmlReportInputs inputs;
+    inputs.title = options.report_title;
+    inputs.reconstruction = &model;
+    inputs.database = &database;
+    inputs.image_dir = image_dir;
+    inputs.summary = result.summary;
+    inputs.evaluation = result.evaluation;
+    result.report_path = output_dir / "report.html";
+    WriteHtmlReport(inputs, result.report_path);
+    PARALLAX_LOG(Info) << "report: " << result.report_path.string() << " (" << timer.ElapsedSeconds() << " s)";
+  }
   return result;
 }
 

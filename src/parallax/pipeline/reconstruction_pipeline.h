@@ -1,29 +1,40 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
+#include <string>
 
-#include "parallax/pipeline/feature_extraction.h"
-#include "parallax/pipeline/feature_matching.h"
+#include "parallax/pipeline/extraction_stage.h"
+#include "parallax/pipeline/matching_stage.h"
 #include "parallax/pipeline/mapping_stage.h"
 #include "parallax/pipeline/run_summary.h"
+#include "parallax/report/evaluation.h"
 
 namespace parallax {
 
 struct ReconstructionPipelineOptions {
-  FeatureExtractionOptions extraction;
-  FeatureMatchingPipelineOptions matching;
+  ExtractionStageOptions extraction;
+  MatchingStageOptions matching;
   MappingStageOptions mapping;
   // Feature/match database; empty: OUT/database.db. Kept so that a rerun resumes.
   std::filesystem::path database_path;
+  // Ground truth (Middlebury *_par.txt or Strecha gt/) to evaluate the first model against;
+  // empty: none.
+  std::filesystem::path ground_truth_path;
+  // OUT/report.html, with the evaluation when there is one.
+  bool write_report = false;
+  std::string report_title = "Parallax reconstruction report";
   void Check() const;
 };
 
 struct ReconstructionPipelineResult {
-  FeatureExtractionStats extraction;
-  FeatureMatchingStats matching;
+  ExtractionStageResult extraction;
+  MatchingStageResult matching;
   MappingStageResult mapping;
   StageTimings timings;
   nlohmann::json summary;
+  std::optional<EvaluationMetrics> evaluation;  // With a ground truth.
+  std::filesystem::path report_path;            // Empty when no report was written.
   bool Success() const { return !mapping.models.empty(); }
 };
 
@@ -32,7 +43,8 @@ struct ReconstructionPipelineResult {
 //   2. matching of the selected pairs + 3. geometric verification (skips verified pairs)
 //   4. incremental mapping with bundle adjustment
 //   5. outputs: OUT/sparse/<k>/, OUT/points.ply, OUT/summary.json (atomic writes; nothing
-//      but the database is written when no model could be started).
+//      but the database is written when no model could be started)
+//   6. evaluation against the ground truth and OUT/report.html, when asked for.
 ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipelineOptions& options,
                                                        const std::filesystem::path& image_dir,
                                                        const std::filesystem::path& output_dir);

@@ -105,7 +105,7 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   return summary;
 }
 
-nlohmann::json MatchingSummary(const FeatureMatchingStats& stats) {
+nlohmann::json MatchingSummary(const MatchingStageResult& stats) {
   nlohmann::json modes = nlohmann::json::array();
   for (const PairMode mode : stats.selection.modes) modes.push_back(PairModeName(mode));
   nlohmann::json summary = {{"pair_modes", modes},

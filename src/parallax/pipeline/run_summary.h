@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "parallax/pipeline/feature_matching.h"
+#include "parallax/pipeline/matching_stage.h"
 #include "parallax/pipeline/mapping_stage.h"
 
 namespace parallax {
@@ -20,7 +20,7 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
 
 // The matching stage: how pairs were chosen and why, pairs considered, matched, stopped by
 // the preemptive test, verified, and the time of each part.
-nlohmann::json MatchingSummary(const FeatureMatchingStats& stats);
+nlohmann::json MatchingSummary(const MatchingStageResult& stats);
 
 void WriteRunSummary(const nlohmann::json& summary, const std::filesystem::path& path);
 

@@ -12,14 +12,14 @@
 
 namespace parallax {
 
-struct FeatureExtractionOptions {
+struct ExtractionStageOptions {
   // The paper's detector (3 layers, edge 10, sigma 1.6) with contrast 0.03 instead of its 0.04:
   // on templeRing with known K that keeps 24 % more keypoints (1,078 instead of 869 per image)
   // and gives 8,303 points instead of 6,705, 0.115 deg median rotation error instead of
   // 0.158, for 3 s more. `--sift-contrast 0.04` is the paper's setting (COLMAP's is 0.02).
   SiftExtractionOptions sift{.contrast_threshold = 0.03};
   ImageReaderOptions reader;   // Decoding limits.
-  CameraSetupOptions camera;   // How cameras are assigned to images.
+  CameraSetupOptions camera;   // How cameras are assigned to images (LoadCameraSetup).
   int num_threads = -1;        // Images extracted in parallel; -1: all cores.
   // Images stored in the database whose file has left the folder (or is no longer an image)
   // are deleted from it with everything computed from them, so that no later stage uses
@@ -28,7 +28,7 @@ struct FeatureExtractionOptions {
   void Check() const;
 };
 
-struct FeatureExtractionStats {
+struct ExtractionStageResult {
   size_t num_images_found = 0;  // Image files in the folder.
   size_t num_extracted = 0;     // Extracted and written in this run.
   size_t num_skipped = 0;       // Already in the database with features (resumed run).
@@ -52,12 +52,12 @@ struct FeatureExtractionStats {
 // skipped. Images are processed in parallel and written in name order, so image ids are
 // deterministic. Throws InputError for a missing folder or intrinsics file, or a database
 // that cannot be written.
-// Refuses camera settings that no image can satisfy (unknown model, unreadable or malformed
-// K.txt or camera.json, conflicting sources, wrong number of --camera-params) with an
-// InputError, before any work.
-void CheckCameraSetup(const CameraSetupOptions& options);
 
-FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
+// Cameras are assigned from `cameras` (LoadCameraSetup of options.camera, which the
+// three-argument form loads itself).
+ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options, const CameraSetup& cameras,
+                                         const std::filesystem::path& image_dir, Database* database);
+ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
                                        const std::filesystem::path& image_dir, Database* database);
 
 }  // namespace parallax

@@ -1,4 +1,4 @@
-#include "parallax/pipeline/feature_extraction.h"
+#include "parallax/pipeline/extraction_stage.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -53,10 +53,10 @@ TEST_F(FeatureExtractionTest, ExtractsSkipsBadFilesAndResumes) {
       << std::string("\x89PNG\r\n\x1a\n", 8) << "not really a png";
   std::ofstream(images_ / "notes.txt") << "not an image\n";
 
-  FeatureExtractionOptions options;
+  ExtractionStageOptions options;
   options.num_threads = 2;
   Database database(dir_ / "database.db");
-  const FeatureExtractionStats stats = ExtractFeatures(options, images_, &database);
+  const ExtractionStageResult stats = RunExtractionStage(options, images_, &database);
   EXPECT_EQ(stats.num_images_found, 4u);
   EXPECT_EQ(stats.num_extracted, 3u);
   EXPECT_EQ(stats.num_skipped, 0u);
@@ -96,7 +96,7 @@ TEST_F(FeatureExtractionTest, ExtractsSkipsBadFilesAndResumes) {
   // A second run (a resumed one) only retries what failed; new images are added with the
   // existing camera of their size.
   WriteImage("d.png", 320, 240);
-  const FeatureExtractionStats resumed = ExtractFeatures(options, images_, &database);
+  const ExtractionStageResult resumed = RunExtractionStage(options, images_, &database);
   EXPECT_EQ(resumed.num_images_found, 5u);
   EXPECT_EQ(resumed.num_skipped, 3u);
   EXPECT_EQ(resumed.num_extracted, 1u);
@@ -112,12 +112,12 @@ TEST_F(FeatureExtractionTest, IntrinsicsAndSingleCamera) {
   WriteImage("b.png", 320, 240);
   WriteImage("c.png", 300, 240);
   std::ofstream(dir_ / "K.txt", std::ios::binary) << "400 0 161.5 \r\n0 401 119.5 \r\n0 0 1 \r\n";
-  FeatureExtractionOptions options;
+  ExtractionStageOptions options;
   options.camera.intrinsics_path = dir_ / "K.txt";
   options.camera.single_camera = true;
   options.sift.max_num_features = 100;
   Database database(dir_ / "database.db");
-  const FeatureExtractionStats stats = ExtractFeatures(options, images_, &database);
+  const ExtractionStageResult stats = RunExtractionStage(options, images_, &database);
   EXPECT_EQ(stats.num_extracted, 2u);
   ASSERT_EQ(stats.failed.size(), 1u);
   EXPECT_EQ(stats.failed[0].first, "c.png");  // Not the single camera's size.
@@ -136,9 +136,9 @@ TEST_F(FeatureExtractionTest, WarnsAboutFilesNamedLikeImagesAndBlankImages) {
   std::ofstream(images_ / "notes.txt") << "not named like one\n";
   ASSERT_TRUE(cv::imwrite((images_ / "blank.png").string(),
                           cv::Mat(120, 160, CV_8UC3, cv::Scalar::all(90))));
-  FeatureExtractionOptions options;
+  ExtractionStageOptions options;
   Database database(dir_ / "database.db");
-  const FeatureExtractionStats stats = ExtractFeatures(options, images_, &database);
+  const ExtractionStageResult stats = RunExtractionStage(options, images_, &database);
   EXPECT_EQ(stats.num_images_found, 2u);
   EXPECT_EQ(stats.num_extracted, 2u);  // The blank image is stored, with no keypoints.
   ASSERT_EQ(stats.failed.size(), 2u);
@@ -150,30 +150,30 @@ TEST_F(FeatureExtractionTest, WarnsAboutFilesNamedLikeImagesAndBlankImages) {
 
 TEST_F(FeatureExtractionTest, CameraSettingsNoImageCanSatisfyFailBeforeAnyWork) {
   WriteImage("a.png", 64, 48);
-  FeatureExtractionOptions options;
+  ExtractionStageOptions options;
   options.camera.camera_model = "PINHOLE";
   options.camera.camera_params = {100, 100, 32};
-  EXPECT_THROW(CheckCameraSetup(options.camera), InputError);
+  EXPECT_THROW(LoadCameraSetup(options.camera), InputError);
   Database database(dir_ / "database.db");
-  EXPECT_THROW(ExtractFeatures(options, images_, &database), InputError);
+  EXPECT_THROW(RunExtractionStage(options, images_, &database), InputError);
   EXPECT_EQ(database.NumImages(), 0u);
   options.camera.camera_params = {100, 100, 32, 24};
-  EXPECT_NO_THROW(CheckCameraSetup(options.camera));
+  EXPECT_NO_THROW(LoadCameraSetup(options.camera));
   options.camera.camera_model = "NO_SUCH_MODEL";
-  EXPECT_THROW(CheckCameraSetup(options.camera), InputError);
+  EXPECT_THROW(LoadCameraSetup(options.camera), InputError);
   options.camera = CameraSetupOptions();
   std::ofstream(dir_ / "K.txt") << "1 2 3\n";
   options.camera.intrinsics_path = dir_ / "K.txt";
-  EXPECT_THROW(CheckCameraSetup(options.camera), InputError);
+  EXPECT_THROW(LoadCameraSetup(options.camera), InputError);
 }
 
 TEST_F(FeatureExtractionTest, MissingInputsThrow) {
-  FeatureExtractionOptions options;
+  ExtractionStageOptions options;
   Database database(dir_ / "database.db");
-  EXPECT_THROW(ExtractFeatures(options, dir_ / "no_such_folder", &database), InputError);
+  EXPECT_THROW(RunExtractionStage(options, dir_ / "no_such_folder", &database), InputError);
   options.camera.intrinsics_path = dir_ / "missing_K.txt";
   WriteImage("a.png", 64, 48);
-  EXPECT_THROW(ExtractFeatures(options, images_, &database), InputError);
+  EXPECT_THROW(RunExtractionStage(options, images_, &database), InputError);
   EXPECT_EQ(database.NumImages(), 0u);
 }
 

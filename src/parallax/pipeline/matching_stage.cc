@@ -1,4 +1,4 @@
-#include "parallax/pipeline/feature_matching.h"
+#include "parallax/pipeline/matching_stage.h"
 
 #include <algorithm>
 #include <unordered_map>
@@ -79,7 +79,7 @@ void PreemptiveMatchingOptions::Check() const {
   PARALLAX_CHECK_LE(max_ratio, 1.0);
 }
 
-void FeatureMatchingPipelineOptions::Check() const {
+void MatchingStageOptions::Check() const {
   matching.Check();
   geometry.Check();
   pairs.Check();
@@ -87,12 +87,12 @@ void FeatureMatchingPipelineOptions::Check() const {
   PARALLAX_CHECK_GT(batch_size, 0);
 }
 
-FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& options,
+MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
                                     Database* database) {
   options.Check();
   PARALLAX_CHECK(database != nullptr);
   const Timer timer;
-  FeatureMatchingStats stats;
+  MatchingStageResult stats;
 
   std::vector<Image> images = database->ReadAllImages();
   std::sort(images.begin(), images.end(),

@@ -1,4 +1,4 @@
-#include "parallax/pipeline/feature_matching.h"
+#include "parallax/pipeline/matching_stage.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -110,9 +110,9 @@ TEST(PairSelection, SequentialOverlap) {
 TEST_F(FeatureMatchingTest, ExhaustiveMatchesAndVerifiesEveryPair) {
   Database database(dir_ / "database.db");
   MakeScene(&database, 4, 150, 60);
-  FeatureMatchingPipelineOptions options;
+  MatchingStageOptions options;
   options.num_threads = 2;
-  const FeatureMatchingStats stats = MatchAndVerify(options, &database);
+  const MatchingStageResult stats = RunMatchingStage(options, &database);
   EXPECT_EQ(stats.num_pairs, 6u);
   EXPECT_EQ(stats.num_matched, 6u);
   EXPECT_EQ(stats.num_skipped, 0u);
@@ -138,7 +138,7 @@ TEST_F(FeatureMatchingTest, ExhaustiveMatchesAndVerifiesEveryPair) {
   }
 
   // A second run finds everything done.
-  const FeatureMatchingStats again = MatchAndVerify(options, &database);
+  const MatchingStageResult again = RunMatchingStage(options, &database);
   EXPECT_EQ(again.num_pairs, 6u);
   EXPECT_EQ(again.num_skipped, 6u);
   EXPECT_EQ(again.num_matched, 0u);
@@ -150,7 +150,7 @@ TEST_F(FeatureMatchingTest, SequentialPairsFollowNamesAndResume) {
   MakeScene(&database, 5, 100, 20);
   // Pairs stored by an earlier, interrupted run: one fully verified, one with matches only.
   database.WriteTwoViewGeometry(5, 4, TwoViewGeometry());
-  FeatureMatchingPipelineOptions options;
+  MatchingStageOptions options;
   options.pairs.mode = PairMode::kSequential;
   options.pairs.sequential_overlap = 1;
   options.batch_size = 2;
@@ -167,7 +167,7 @@ TEST_F(FeatureMatchingTest, SequentialPairsFollowNamesAndResume) {
     }
     database.WriteMatches(3, 2, matches);
   }
-  const FeatureMatchingStats stats = MatchAndVerify(options, &database);
+  const MatchingStageResult stats = RunMatchingStage(options, &database);
   // Names view1..view5 belong to ids 5..1, so the sequence is 5-4, 4-3, 3-2, 2-1.
   EXPECT_EQ(stats.num_pairs, 4u);
   EXPECT_EQ(stats.num_skipped, 1u);
@@ -204,7 +204,7 @@ TEST_F(FeatureMatchingTest, PairsWithoutCommonPointsAreDegenerate) {
     }
     database.WriteImageWithFeatures(name, camera_id, keypoints, descriptors);
   }
-  const FeatureMatchingStats stats = MatchAndVerify(FeatureMatchingPipelineOptions(), &database);
+  const MatchingStageResult stats = RunMatchingStage(MatchingStageOptions(), &database);
   ASSERT_EQ(stats.pairs.size(), 1u);
   EXPECT_EQ(stats.num_verified, 0u);
   EXPECT_LT(stats.pairs[0].num_putative, 15);
@@ -234,11 +234,11 @@ TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
     }
     database.WriteImageWithFeatures(name, camera_id, keypoints, descriptors);
   }
-  FeatureMatchingPipelineOptions options;
+  MatchingStageOptions options;
   options.num_threads = 2;
   options.preemptive.enabled = true;
   options.preemptive.num_features = 50;
-  const FeatureMatchingStats stats = MatchAndVerify(options, &database);
+  const MatchingStageResult stats = RunMatchingStage(options, &database);
   EXPECT_TRUE(stats.preemptive);
   EXPECT_EQ(stats.num_pairs, 15u);
   // The 9 pairs with a clutter image are stopped; the 6 scene pairs all pass and verify.
@@ -253,7 +253,7 @@ TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
     }
   }
   // Stopped pairs are stored: a rerun does not test them again.
-  const FeatureMatchingStats again = MatchAndVerify(options, &database);
+  const MatchingStageResult again = RunMatchingStage(options, &database);
   EXPECT_EQ(again.num_skipped, 15u);
   EXPECT_EQ(again.num_matched, 0u);
 }

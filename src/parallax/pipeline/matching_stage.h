@@ -29,7 +29,7 @@ struct PreemptiveMatchingOptions {
   void Check() const;
 };
 
-struct FeatureMatchingPipelineOptions {
+struct MatchingStageOptions {
   FeatureMatchingOptions matching;  // Ratio test, distance bound, cross-check.
   TwoViewGeometryOptions geometry;  // Geometric verification (RANSAC threshold, inliers).
   PairSelectionOptions pairs;       // Which pairs (exhaustive, retrieval, GPS, ...).
@@ -51,7 +51,7 @@ struct PairMatchStats {
   bool preemptive_rejected = false;  // The full match was skipped.
 };
 
-struct FeatureMatchingStats {
+struct MatchingStageResult {
   PairSelection selection;            // How the pairs were chosen (pairs themselves cleared).
   bool preemptive = false;            // Whether the preemptive test ran.
   size_t num_pairs = 0;               // Pairs the mode selects ("considered").
@@ -71,7 +71,7 @@ struct FeatureMatchingStats {
 // two_view_geometries in batches, one transaction each. Pairs that already have a two-view
 // geometry are skipped (resume); pairs with stored matches but no geometry are verified
 // from those matches. Keypoints are used as stored (COLMAP's +0.5 pixel-centre convention).
-FeatureMatchingStats MatchAndVerify(const FeatureMatchingPipelineOptions& options,
+MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
                                     Database* database);
 
 }  // namespace parallax

@@ -1,4 +1,4 @@
-#include "parallax/pipeline/feature_extraction.h"
+#include "parallax/pipeline/extraction_stage.h"
 
 #include <chrono>
 #include <memory>
@@ -86,7 +86,7 @@ ImageFileFingerprint FingerprintImageFile(const std::filesystem::path& path,
 // with a new time, `touch`), and the stored fingerprint is brought up to date. Images stored
 // without a fingerprint (by COLMAP, or an older Parallax) are taken as current and get one.
 bool StoredFeaturesAreCurrent(image_t image_id, const std::filesystem::path& path,
-                              Database* database, FeatureExtractionStats* stats) {
+                              Database* database, ExtractionStageResult* stats) {
   const std::optional<ImageFileFingerprint> stored = database->ReadImageFileFingerprint(image_id);
   const ImageFileFingerprint now = StatImageFile(path);
   if (stored && stored->size == now.size && stored->mtime_ns == now.mtime_ns) return true;
@@ -96,7 +96,7 @@ bool StoredFeaturesAreCurrent(image_t image_id, const std::filesystem::path& pat
   return true;
 }
 
-ExtractionResult ExtractImage(const ExtractionJob& job, const FeatureExtractionOptions& options) {
+ExtractionResult ExtractImage(const ExtractionJob& job, const ExtractionStageOptions& options) {
   ExtractionResult result;
   try {
     result.fingerprint = FingerprintImageFile(job.path, &result.hash_seconds);
@@ -119,28 +119,24 @@ ExtractionResult ExtractImage(const ExtractionJob& job, const FeatureExtractionO
 
 }  // namespace
 
-void FeatureExtractionOptions::Check() const {
+void ExtractionStageOptions::Check() const {
   sift.Check();
   reader.Check();
   camera.Check();
 }
 
-void CheckCameraSetup(const CameraSetupOptions& options) {
-  options.Check();
-  // The assigner reads and validates K.txt, camera.json and their combination; a scratch
-  // in-memory database keeps nothing.
-  Database scratch(":memory:");
-  const CameraAssigner assigner(options, &scratch);
-  // The number and values of --camera-params do not depend on the image size.
-  if (!options.camera_params.empty()) MakeCamera(options, std::nullopt, 640, 480);
+ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
+                                         const std::filesystem::path& image_dir, Database* database) {
+  // A setting no image can satisfy would otherwise skip every image with the same warning.
+  return RunExtractionStage(options, LoadCameraSetup(options.camera), image_dir, database);
 }
 
-FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
-                                       const std::filesystem::path& image_dir, Database* database) {
+ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options, const CameraSetup& cameras,
+                                         const std::filesystem::path& image_dir, Database* database) {
   options.Check();
   PARALLAX_CHECK(database != nullptr);
   const Timer timer;
-  FeatureExtractionStats stats;
+  ExtractionStageResult stats;
 
   std::vector<RejectedImageFile> rejected;
   const std::vector<std::filesystem::path> paths = ListImageFiles(image_dir, &rejected);
@@ -151,9 +147,7 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
     PARALLAX_LOG(Warning) << "skipping " << message;
     stats.failed.emplace_back(file.path.filename().string(), message);
   }
-  // A setting no image can satisfy would otherwise skip every image with the same warning.
-  CheckCameraSetup(options.camera);
-  CameraAssigner camera_assigner(options.camera, database);
+  CameraAssigner camera_assigner(cameras, database);
 
   std::set<std::string> names_in_folder;
   std::vector<ExtractionJob> jobs;
@@ -219,7 +213,7 @@ FeatureExtractionStats ExtractFeatures(const FeatureExtractionOptions& options,
         const ImageCameraInfo info =
             camera_assigner.UsesExif() && result.exif
                 ? ImageCameraInfoFromExif(*result.exif, result.width, result.height,
-                                          options.camera.sensor_width_mm)
+                                          cameras.options.sensor_width_mm)
                 : ImageCameraInfo{};
         camera_id = camera_assigner.CameraForImage(job.path.string(), result.width, result.height, info);
       } catch (const InputError& error) {
