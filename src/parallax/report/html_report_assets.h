@@ -1,7 +1,8 @@
 #pragma once
 
-// The static parts of the HTML report (private to report/): one stylesheet and three scripts
-// kept in C++ raw strings so that the report needs no file at run time and no network.
+// The static parts of the HTML report (private to report/): the stylesheet and scripts in
+// report/assets/, embedded at build time (report/CMakeLists.txt), so that the report needs
+// no file at run time and no network.
 namespace parallax::internal {
 
 // The stylesheet.

@@ -1,11 +1,4 @@
-#include "parallax/report/html_report_assets.h"
-
-// The script that lays out the HTML report from the embedded JSON data.
-namespace parallax::internal {
-
-const char* HtmlReportMainScript() {
-  // Sets #report-status to "ok" when every section rendered without error.
-  return R"JS(
+/* Sets #report-status to "ok" when every section rendered without error. */
 // Builds the report from the JSON embedded in #report-data.
 'use strict';
 (function () {
@@ -323,7 +316,3 @@ const char* HtmlReportMainScript() {
   installTooltips();
   if (window.reportErrors.length === 0) document.getElementById('report-status').textContent = 'ok';
 })();
-)JS";
-}
-
-}  // namespace parallax::internal

@@ -1,11 +1,4 @@
-#include "parallax/report/html_report_assets.h"
-
-// Plot helpers of the HTML report (plain SVG and canvas, no libraries).
-namespace parallax::internal {
-
-const char* HtmlReportPlotsScript() {
-  // Globals: el, svgEl, fmt, barChart, horizontalBars, heatmap, frameSvg, pairSvg.
-  return R"JS(
+/* Globals: el, svgEl, fmt, barChart, horizontalBars, heatmap, frameSvg, pairSvg. */
 // Small plotting helpers: DOM and SVG builders, bar charts, heatmaps and image overlays.
 'use strict';
 const SVG_NS = 'http://www.w3.org/2000/svg';
@@ -270,7 +263,3 @@ function pairSvg(parent, frame1, frame2, lines) {
   }
   return svg;
 }
-)JS";
-}
-
-}  // namespace parallax::internal

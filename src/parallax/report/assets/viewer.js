@@ -1,11 +1,4 @@
-#include "parallax/report/html_report_assets.h"
-
-// The 3D viewer of the HTML report: WebGL 1 points and lines, orbit camera, 2D fallback.
-namespace parallax::internal {
-
-const char* HtmlReportViewerScript() {
-  // Globals: prepareScene, SceneView.
-  return R"JS(
+/* Globals: prepareScene, SceneView. */
 // A small point-cloud viewer: WebGL points and lines with an orbit camera (left drag: orbit,
 // right or shift drag: pan, wheel: zoom), or the same drawing on a 2D canvas without WebGL.
 'use strict';
@@ -314,7 +307,3 @@ class SceneView {
     canvas.addEventListener('dblclick', () => { this.reset(); this.requestRender(); });
   }
 }
-)JS";
-}
-
-}  // namespace parallax::internal
