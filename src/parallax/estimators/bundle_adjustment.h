@@ -25,10 +25,8 @@ std::optional<BundleAdjustmentSolver> BundleAdjustmentSolverFromName(const std::
 
 struct BundleAdjustmentOptions {
   BundleAdjustmentSolver solver = BundleAdjustmentSolver::kAuto;
-  // 6 per variable pose plus the free intrinsics: 1500 is 250 images. Measured on synthetic
-  // sequences (mapper, all adjustments): at 160 images the dense Schur LM took 37 s of BA
-  // against Ceres' sparse Schur 87 s; at 250 images 76 s against 185 s, and 572 MB peak
-  // against 882 MB. Larger problems are untried with it (its reduced matrix is n^2 doubles).
+  // 6 per variable pose plus the free intrinsics: 1500 is 250 images, where the dense reduced
+  // matrix (n^2 doubles) stops paying (README, "Dense Schur up to 250 images").
   int max_dense_schur_variables = 1500;
   // The sparse Schur LM's linear solve.
   ConjugateGradientOptions conjugate_gradient;

@@ -16,9 +16,8 @@ namespace parallax {
 namespace {
 
 // Below this many variable images the reduced camera system is small enough for a dense
-// Cholesky; above it the sparse one wins. Measured on a 100-view synthetic sequence (263k
-// observations): dense Schur spent 2.3x less per iteration in the linear solver than sparse
-// Schur with SuiteSparse, since Ceres' sparse Schur complement is built block by block.
+// Cholesky, which beats Ceres' block-by-block sparse Schur complement (README, "Dense Schur
+// up to 250 images").
 constexpr size_t kMaxNumImagesForDenseSchur = 150;
 
 // Dense Schur for few images; sparse Schur with the best sparse Cholesky Ceres was built with

@@ -65,8 +65,8 @@ struct IncrementalMapperOptions {
   int global_ba_max_refinements = 3;     // BA + filter + complete rounds of the final BA.
   // The final adjustment also frees the principal point of cameras without a prior when each
   // is seen by at least this many images (0: never), and keeps it only if it stays near the
-  // image centre. On templeRing without intrinsics the centred principal point is 18 px off
-  // and focal and k1 absorbed it: 0.83 deg median rotation error, 0.13 deg once freed.
+  // image centre: a centred guess that is off is otherwise absorbed by focal length and
+  // distortion (README, "Principal point freed at the end").
   int final_principal_point_min_images = 10;
   // Models.
   int min_model_size = 3;                // Smaller models are discarded.
