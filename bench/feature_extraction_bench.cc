@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "parallax/image/image_reader.h"
 #include "parallax/feature/sift.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/util/file.h"
 #include "parallax/util/timer.h"
 

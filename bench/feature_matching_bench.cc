@@ -15,16 +15,16 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <optional>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "parallax/image/image_reader.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/feature/sift.h"
 #include "parallax/feature/similarity_kernel.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/math/random.h"
 #include "parallax/util/file.h"
 #include "parallax/util/timer.h"
@@ -142,7 +142,8 @@ double ProcessCpuSeconds() {
 void SetCounters(benchmark::State& state, const DescriptorPair& pair, double total_seconds,
                  double total_cpu_seconds, size_t num_matches) {
   const double iterations = static_cast<double>(state.iterations());
-  const double flops = 2.0 * pair.descriptors1.values.rows() * pair.descriptors2.values.rows() * 128;
+  const double flops =
+      2.0 * pair.descriptors1.values.rows() * pair.descriptors2.values.rows() * 128;
   state.counters["ms_per_pair"] = 1e3 * total_seconds / iterations;
   state.counters["cpu_ms_per_pair"] = 1e3 * total_cpu_seconds / iterations;
   state.counters["GFLOP/s"] = flops * iterations / total_seconds * 1e-9;
@@ -223,9 +224,8 @@ void BM_SimilarityKernel(benchmark::State& state) {
     ComputeSimilarities(a_packed.data(), padded_a, b.data(), kNum, kDim, out.data(), kernel);
     benchmark::DoNotOptimize(out.data());
   }
-  state.counters["GFLOP/s"] = benchmark::Counter(2.0 * kNum * kNum * kDim * state.iterations() /
-                                                     1e9,
-                                                 benchmark::Counter::kIsRate);
+  state.counters["GFLOP/s"] = benchmark::Counter(
+      2.0 * kNum * kNum * kDim * state.iterations() / 1e9, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_SimilarityKernel)->ArgName("kernel")->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
 
@@ -244,7 +244,8 @@ void PrintAgreement(int which) {
   nearest_options.max_distance = 2.0;
   nearest_options.cross_check = false;
   std::vector<int> nearest(num_queries, -1);
-  for (const auto& match : MatchDescriptors(pair.descriptors1, pair.descriptors2, nearest_options)) {
+  for (const auto& match :
+       MatchDescriptors(pair.descriptors1, pair.descriptors2, nearest_options)) {
     nearest[match.point2D_idx1] = static_cast<int>(match.point2D_idx2);
   }
   int num_agreeing = 0;

@@ -19,9 +19,9 @@
 #include "parallax/estimators/solvers/fundamental_matrix.h"
 #include "parallax/estimators/solvers/homography_matrix.h"
 #include "parallax/estimators/two_view_geometry.h"
-#include "parallax/image/image_reader.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/feature/sift.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/math/random.h"
 #include "parallax/util/file.h"
 

@@ -13,10 +13,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const std::filesystem::path path = [] {
     std::atexit([] {
       std::error_code ignored;
-      std::filesystem::remove(std::filesystem::temp_directory_path() /
-                                  ("parallax_calibration_matrix_fuzz_" +
-                                   std::to_string(getpid()) + ".txt"),
-                              ignored);
+      std::filesystem::remove(
+          std::filesystem::temp_directory_path() /
+              ("parallax_calibration_matrix_fuzz_" + std::to_string(getpid()) + ".txt"),
+          ignored);
     });
     return std::filesystem::temp_directory_path() /
            ("parallax_calibration_matrix_fuzz_" + std::to_string(getpid()) + ".txt");

@@ -48,8 +48,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   Reconstruction model;
   if (!ReadSections(sections, &model)) return 0;
 
-  std::ostringstream cameras(std::ios::binary), images(std::ios::binary),
-      points(std::ios::binary);
+  std::ostringstream cameras(std::ios::binary), images(std::ios::binary), points(std::ios::binary);
   parallax::WriteCamerasBinary(model, cameras);
   parallax::WriteImagesBinary(model, images);
   parallax::WritePoints3DBinary(model, points);

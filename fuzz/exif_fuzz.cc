@@ -8,7 +8,8 @@
 namespace {
 
 void CheckFocalLength(const parallax::ExifData& exif) {
-  for (const auto& [width, height] : {std::pair{640, 480}, std::pair{1, 1}, std::pair{8000, 6000}}) {
+  for (const auto& [width, height] :
+       {std::pair{640, 480}, std::pair{1, 1}, std::pair{8000, 6000}}) {
     const std::optional<double> focal =
         parallax::FocalLengthPixelsFromExif(exif, width, height, 6.17);
     if (focal) {

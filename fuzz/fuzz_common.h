@@ -40,9 +40,9 @@ bool ParsesOrRejects(Parse&& parse) {
 }
 
 // Properties that must hold for accepted input.
-#define PARALLAX_FUZZ_EXPECT(condition)                                           \
-  do {                                                                            \
-    if (!(condition)) ::parallax::fuzz::Abort("property failed", #condition);   \
+#define PARALLAX_FUZZ_EXPECT(condition)                                       \
+  do {                                                                        \
+    if (!(condition)) ::parallax::fuzz::Abort("property failed", #condition); \
   } while (false)
 
 inline std::string_view AsStringView(const uint8_t* data, size_t size) {

@@ -234,13 +234,20 @@ void ParseGpsIfd(const TiffReader& reader, uint64_t ifd_offset, ExifData* exif) 
         longitude_sign = ref && *ref == "W" ? -1 : 1;
         break;
       }
-      case kTagGpsLatitude: latitude = ReadDegrees(reader, entry); break;
-      case kTagGpsLongitude: longitude = ReadDegrees(reader, entry); break;
+      case kTagGpsLatitude:
+        latitude = ReadDegrees(reader, entry);
+        break;
+      case kTagGpsLongitude:
+        longitude = ReadDegrees(reader, entry);
+        break;
       case kTagGpsAltitudeRef:
         if (entry.type == kTypeByte && reader.Byte(entry.value_offset) == 1) altitude_sign = -1;
         break;
-      case kTagGpsAltitude: altitude = ReadNumber(reader, entry); break;
-      default: break;
+      case kTagGpsAltitude:
+        altitude = ReadNumber(reader, entry);
+        break;
+      default:
+        break;
     }
   }
   if (latitude && longitude && latitude_ref_valid && longitude_ref_valid &&

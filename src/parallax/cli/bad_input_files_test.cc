@@ -122,7 +122,8 @@ TEST_F(BadInputFilesTest, MalformedStrechaCameraFiles) {
       {Replace(valid, "0 300 24", "0 300"), ":2:", "expected 3 numbers, found 2"},
       {Replace(valid, "64 48", "64 x"), ":9:", "not a finite number: 'x'"},
       {Replace(valid, "64 48", "0 48"), ":9:", "image size must be two positive integers"},
-      {Replace(valid, "64 48", "1e300 48"), ":9:", "image size must be two positive integers up to"},
+      {Replace(valid, "64 48", "1e300 48"),
+       ":9:", "image size must be two positive integers up to"},
       {Replace(valid, "64 48", "64.5 48"), ":9:", "image size"},
       {Replace(valid, "1 0 0\n0 1 0", "1 0 0\n1 0 0"), ":5:", "R is not a rotation matrix"},
       {valid + "1 2 3\n", ":10:", "trailing data"},
@@ -146,16 +147,16 @@ TEST_F(BadInputFilesTest, ModelWithDanglingIds) {
   const std::string bad_camera = first_line.substr(0, first_line.rfind(" 1 ")) + " 9 " +
                                  first_line.substr(first_line.rfind(" 1 ") + 3);
   const std::vector<std::tuple<std::string, std::string, std::string, std::string>> cases = {
-      {"images.txt", Replace(images, first_line, bad_camera), ":1:",
-       "image 1 refers to missing camera 9"},
-      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 42 0\n", ":1:",
-       "3D point 1 observed in missing image 42"},
-      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 2 7\n", ":1:",
-       "refers to missing keypoint 7 of image 2"},
-      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 1 0\n", ":1:",
-       "keypoint 0 of image 1 observes two 3D points"},
-      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 2 0\n1 0 0 0 1 2 3 0.5 3 0\n", ":2:",
-       "duplicate 3D point id 1"},
+      {"images.txt", Replace(images, first_line, bad_camera),
+       ":1:", "image 1 refers to missing camera 9"},
+      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 42 0\n",
+       ":1:", "3D point 1 observed in missing image 42"},
+      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 2 7\n",
+       ":1:", "refers to missing keypoint 7 of image 2"},
+      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 1 0\n",
+       ":1:", "keypoint 0 of image 1 observes two 3D points"},
+      {"points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 2 0\n1 0 0 0 1 2 3 0.5 3 0\n",
+       ":2:", "duplicate 3D point id 1"},
       {"images.txt", images + images, ":7:", "duplicate image id 1"},
       {"cameras.txt", "1 PINHOLE 64 48 -57 57 32 24\n", ":1:", "invalid parameters for camera 1"},
       {"cameras.txt", "1 FISHEYE 64 48 57 57 32 24\n", ":1:", "unknown camera model 'FISHEYE'"},
@@ -193,9 +194,9 @@ TEST_F(BadInputFilesTest, IncompleteAndBinaryModels) {
                        std::string("\x01\0\0\0", 4) + std::string("\x40\0\0\0\0\0\0\0", 8) +
                        std::string("\x30\0\0\0\0\0\0\0", 8) + std::string(16, '\0');
   WriteBytes(binary / "cameras.bin", camera);
-  ExpectFailsWithOneLineError(Evaluate(binary, Par()),
-                              (binary / "cameras.bin").string() + ":byte 48:",
-                              "truncated: cannot read camera parameter");
+  ExpectFailsWithOneLineError(
+      Evaluate(binary, Par()),
+      (binary / "cameras.bin").string() + ":byte 48:", "truncated: cannot read camera parameter");
   WriteBytes(binary / "cameras.bin", std::string(8, '\xff'));
   ExpectFailsWithOneLineError(Evaluate(binary, Par()), (binary / "cameras.bin").string() + ":byte",
                               "exceeds what the remaining");
@@ -204,10 +205,9 @@ TEST_F(BadInputFilesTest, IncompleteAndBinaryModels) {
   fs::create_directories(out / "sparse");
   fs::copy(ModelWith("dangling", "points3D.txt", "1 0 0 0 10 20 30 0.5 1 0 42 0\n"),
            out / "sparse" / "0");
-  const ProcessResult report =
-      test::RunParallax({"report", out.string()}, dir_->path(), 60);
-  ExpectFailsWithOneLineError(report, (out / "sparse" / "0" / "points3D.txt").string() + ":1:",
-                              "missing image 42");
+  const ProcessResult report = test::RunParallax({"report", out.string()}, dir_->path(), 60);
+  ExpectFailsWithOneLineError(
+      report, (out / "sparse" / "0" / "points3D.txt").string() + ":1:", "missing image 42");
   EXPECT_FALSE(fs::exists(out / "report.html"));
 }
 

@@ -12,8 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "parallax/cli/cli_test_process.h"
 #include "parallax/cli/cli_test_inputs.h"
+#include "parallax/cli/cli_test_process.h"
 #include "parallax/scene/database.h"
 
 namespace parallax {
@@ -71,14 +71,15 @@ class BadInputTest : public ::testing::Test {
     return test::RunParallax(arguments, dir_->path(), timeout_seconds);
   }
   ProcessResult Features(std::vector<std::string> extra = {}) {
-    std::vector<std::string> arguments = {"features", "--images", images_.string(), "--database",
-                                          Database().string(), "--threads", "2"};
+    std::vector<std::string> arguments = {"features",   "--images",          images_.string(),
+                                          "--database", Database().string(), "--threads",
+                                          "2"};
     arguments.insert(arguments.end(), extra.begin(), extra.end());
     return Run(arguments);
   }
   ProcessResult Reconstruct(std::vector<std::string> extra = {}) {
-    std::vector<std::string> arguments = {"reconstruct", "--images", images_.string(),
-                                          "--output", Out().string(), "--threads", "2"};
+    std::vector<std::string> arguments = {
+        "reconstruct", "--images", images_.string(), "--output", Out().string(), "--threads", "2"};
     arguments.insert(arguments.end(), extra.begin(), extra.end());
     return Run(arguments, 300);
   }
@@ -101,7 +102,6 @@ class BadInputTest : public ::testing::Test {
 };
 
 test::ScopedTestDir* BadInputTest::scene_dir_ = nullptr;
-
 
 // ---------------------------------------------------------------------------------------
 // Image files: skipped with one warning each, the good images are used.
@@ -168,8 +168,10 @@ TEST_F(BadInputTest, HugeImageIsRefusedFromItsHeaderBeforeDecoding) {
   // Real small images whose headers claim 100000 x 100000 (PNG) and 65535 x 65535 (JPEG):
   // decoding them would allocate 30 GB and 12 GB.
   const cv::Mat small = cv::imread(SceneView(3).string());
-  WriteBytes(images_ / "huge.png", test::WithPngSize(test::EncodeImage(".png", small), 100000, 100000));
-  WriteBytes(images_ / "huge.jpg", test::WithJpegSize(test::EncodeImage(".jpg", small), 65535, 65535));
+  WriteBytes(images_ / "huge.png",
+             test::WithPngSize(test::EncodeImage(".png", small), 100000, 100000));
+  WriteBytes(images_ / "huge.jpg",
+             test::WithJpegSize(test::EncodeImage(".jpg", small), 65535, 65535));
   const ProcessResult result = Features();
   ASSERT_TRUE(result.ExitedWith(0)) << result.err;
   ExpectOneWarningNaming(result.err, images_ / "huge.png",
@@ -254,8 +256,8 @@ TEST_F(BadInputTest, EmptyFolderFailsBeforeCreatingAnything) {
 
 TEST_F(BadInputTest, MissingImageFolderFails) {
   const fs::path missing = dir_->path() / "no_such_folder";
-  const ProcessResult result = Run({"reconstruct", "--images", missing.string(), "--output",
-                                    Out().string()});
+  const ProcessResult result =
+      Run({"reconstruct", "--images", missing.string(), "--output", Out().string()});
   ExpectFailsWithOneLineError(result, missing.string(), "does not exist");
   EXPECT_FALSE(fs::exists(Out()));
 }
@@ -349,8 +351,8 @@ TEST_F(BadInputTest, OutputFolderThatCannotBeCreatedFailsBeforeAnyWork) {
       Run({"reconstruct", "--images", images_.string(), "--output", out.string()});
   ExpectFailsWithOneLineError(result, out.string(), "cannot create output folder");
   // The same for an output path that is an existing file.
-  const ProcessResult onto_file =
-      Run({"reconstruct", "--images", images_.string(), "--output", (dir_->path() / "a_file").string()});
+  const ProcessResult onto_file = Run({"reconstruct", "--images", images_.string(), "--output",
+                                       (dir_->path() / "a_file").string()});
   ExpectFailsWithOneLineError(onto_file, (dir_->path() / "a_file").string(),
                               "cannot create output folder");
   EXPECT_EQ(test::ReadBytes(dir_->path() / "a_file"), "not a folder\n");

@@ -42,7 +42,6 @@ CLI::Validator DimensionsValidator(const std::string& example) {
       "AxB");
 }
 
-
 void AddVerbosityFlags(CLI::App& app, VerbosityFlags* flags) {
   app.add_flag("-q,--quiet", flags->quiet, "Print only warnings and errors");
   app.add_flag("-v,--verbose", flags->verbose, "Print debug messages");

@@ -160,11 +160,10 @@ inline ProcessResult RunParallaxAfter(const std::string& shell_prefix,
 // which a few views already reconstruct).
 inline void RenderSyntheticScene(const fs::path& dir, int num_views, int width, int height,
                                  const fs::path& log_dir, const std::string& layout = "ring") {
-  const ProcessResult result =
-      RunParallax({"synth", "--output", dir.string(), "--views", std::to_string(num_views),
-                   "--width", std::to_string(width), "--height", std::to_string(height),
-                   "--layout", layout, "-q"},
-                  log_dir, 300);
+  const ProcessResult result = RunParallax(
+      {"synth", "--output", dir.string(), "--views", std::to_string(num_views), "--width",
+       std::to_string(width), "--height", std::to_string(height), "--layout", layout, "-q"},
+      log_dir, 300);
   ASSERT_TRUE(result.ExitedWith(0)) << result.err;
 }
 

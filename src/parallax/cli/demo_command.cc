@@ -41,7 +41,8 @@ int RunDemo(int argc, char** argv) {
     options.extraction.camera.single_camera = true;
     options.ground_truth_path = scene_dir / (scene.name + "_par.txt");
     options.write_report = true;
-    options.report_title = "Parallax demo: synthetic temple, " + std::to_string(scene.num_views) + " views";
+    options.report_title =
+        "Parallax demo: synthetic temple, " + std::to_string(scene.num_views) + " views";
     options.matching.geometry.ransac.random_seed = scene.seed;
     options.mapping.mapper.absolute_pose.ransac.random_seed = scene.seed;
     const ReconstructionPipelineResult result =

@@ -28,10 +28,11 @@ class DeterminismTest : public ::testing::Test {
   // Returns the run's stderr (the log; -v adds the debug lines).
   std::string Reconstruct(const fs::path& images, const fs::path& out, const std::string& seed,
                           const std::string& threads, const std::string& ba_threads = "1",
-                          const std::string& ba_solver = "auto", const std::string& verbosity = "-q") {
+                          const std::string& ba_solver = "auto",
+                          const std::string& verbosity = "-q") {
     const ProcessResult result = test::RunParallax(
-        {"reconstruct", "--images", images.string(), "--output", out.string(), "--threads",
-         threads, "--ba-threads", ba_threads, "--ba-solver", ba_solver, "--seed", seed, verbosity},
+        {"reconstruct", "--images", images.string(), "--output", out.string(), "--threads", threads,
+         "--ba-threads", ba_threads, "--ba-solver", ba_solver, "--seed", seed, verbosity},
         dir_->path(), 300);
     EXPECT_TRUE(result.ExitedWith(0)) << result.err;
     return result.err;
@@ -96,13 +97,14 @@ TEST_F(DeterminismTest, AnotherSeedDrawsOtherSamples) {
   EXPECT_FALSE(test::ReadBytes(dir_->path() / "a" / "sparse" / "0" / "images.bin") ==
                test::ReadBytes(dir_->path() / "b" / "sparse" / "0" / "images.bin"));
   for (const char* run : {"a", "b"}) {
-    const ProcessResult evaluate = test::RunParallax(
-        {"evaluate", (dir_->path() / run / "sparse" / "0").string(), "--gt",
-         (images / "synth_par.txt").string()},
-        dir_->path());
+    const ProcessResult evaluate =
+        test::RunParallax({"evaluate", (dir_->path() / run / "sparse" / "0").string(), "--gt",
+                           (images / "synth_par.txt").string()},
+                          dir_->path());
     ASSERT_TRUE(evaluate.ExitedWith(0)) << evaluate.err;
     EXPECT_NE(evaluate.out.find("registered / in ground truth          10 / 10"), std::string::npos)
-        << run << "\n" << evaluate.out;
+        << run << "\n"
+        << evaluate.out;
   }
 }
 
@@ -110,13 +112,14 @@ TEST_F(DeterminismTest, AnotherSeedDrawsOtherSamples) {
 TEST_F(DeterminismTest, BaSolverFlagSelectsCeres) {
   const fs::path images = dir_->path() / "images";
   test::RenderSyntheticScene(images, 10, 480, 360, dir_->path(), "sequence");
-  const std::string log = Reconstruct(images, dir_->path() / "ceres", "11", "2", "1", "ceres", "-v");
+  const std::string log =
+      Reconstruct(images, dir_->path() / "ceres", "11", "2", "1", "ceres", "-v");
   EXPECT_NE(log.find("Ceres DENSE_SCHUR"), std::string::npos);
   EXPECT_EQ(log.find("dense Schur LM"), std::string::npos);
-  const ProcessResult evaluate = test::RunParallax(
-      {"evaluate", (dir_->path() / "ceres" / "sparse" / "0").string(), "--gt",
-       (images / "synth_par.txt").string()},
-      dir_->path());
+  const ProcessResult evaluate =
+      test::RunParallax({"evaluate", (dir_->path() / "ceres" / "sparse" / "0").string(), "--gt",
+                         (images / "synth_par.txt").string()},
+                        dir_->path());
   ASSERT_TRUE(evaluate.ExitedWith(0)) << evaluate.err;
   EXPECT_NE(evaluate.out.find("registered / in ground truth          10 / 10"), std::string::npos)
       << evaluate.out;

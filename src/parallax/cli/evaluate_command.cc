@@ -14,7 +14,8 @@ int RunEvaluate(int argc, char** argv) {
   std::string model_path, gt_path;
   bool json = false;
   EvaluationOptions options;
-  app.add_option("model", model_path, "Model folder (COLMAP format, e.g. OUT/sparse/0)")->required();
+  app.add_option("model", model_path, "Model folder (COLMAP format, e.g. OUT/sparse/0)")
+      ->required();
   app.add_option("--gt", gt_path,
                  "Ground truth: a Middlebury *_par.txt file, a folder of Strecha *.camera files or "
                  "a COLMAP model folder (detected automatically)")

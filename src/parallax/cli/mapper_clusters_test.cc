@@ -36,8 +36,9 @@ class MapperClustersTest : public ::testing::Test {
   }
 
   std::vector<std::string> MapperArguments(const fs::path& output) const {
-    return {"mapper", "--database", database_path_.string(), "--image-path", dir_.string(),
-            "--output", output.string(), "--ba-threads", "1", "-q"};
+    return {"mapper",      "--database", database_path_.string(), "--image-path",
+            dir_.string(), "--output",   output.string(),         "--ba-threads",
+            "1",           "-q"};
   }
 
   const test::ScopedTestDir scoped_dir_{"parallax_mapper_clusters_test"};
@@ -48,14 +49,16 @@ class MapperClustersTest : public ::testing::Test {
 
 TEST_F(MapperClustersTest, HierarchicalRunWritesClustersAndMapsEveryImage) {
   std::vector<std::string> arguments = MapperArguments(dir_ / "out");
-  for (const char* argument : {"--mapper", "hierarchical", "--cluster-max-images", "15", "--cluster-overlap", "4"}) {
+  for (const char* argument :
+       {"--mapper", "hierarchical", "--cluster-max-images", "15", "--cluster-overlap", "4"}) {
     arguments.push_back(argument);
   }
   const test::ProcessResult result = test::RunParallax(arguments, dir_, 300);
   ASSERT_TRUE(result.ExitedWith(0)) << result.err;
 
   std::vector<fs::path> cluster_files;
-  for (const auto& entry : fs::directory_iterator(dir_ / "out" / "clusters")) cluster_files.push_back(entry.path());
+  for (const auto& entry : fs::directory_iterator(dir_ / "out" / "clusters"))
+    cluster_files.push_back(entry.path());
   ASSERT_GE(cluster_files.size(), 2u);
   for (const fs::path& file : cluster_files) {
     const ImageCluster cluster = ReadImageCluster(file);
@@ -64,7 +67,8 @@ TEST_F(MapperClustersTest, HierarchicalRunWritesClustersAndMapsEveryImage) {
   }
   const Reconstruction model = ReadReconstruction(dir_ / "out" / "sparse" / "0");
   EXPECT_EQ(model.NumRegImages(), truth_.NumImages());
-  const nlohmann::json summary = nlohmann::json::parse(ReadFileToString(dir_ / "out" / "summary.json"));
+  const nlohmann::json summary =
+      nlohmann::json::parse(ReadFileToString(dir_ / "out" / "summary.json"));
   EXPECT_EQ(summary["mapper"]["hierarchical"]["clusters"].size(), cluster_files.size());
 
   // One cluster alone: its images, no others.
@@ -79,7 +83,8 @@ TEST_F(MapperClustersTest, HierarchicalRunWritesClustersAndMapsEveryImage) {
   EXPECT_EQ(cluster_model.NumRegImages(), cluster.image_names.size());
   const std::set<std::string> names(cluster.image_names.begin(), cluster.image_names.end());
   for (const image_t image_id : cluster_model.RegImageIds()) {
-    EXPECT_TRUE(names.count(cluster_model.GetImage(image_id).name)) << cluster_model.GetImage(image_id).name;
+    EXPECT_TRUE(names.count(cluster_model.GetImage(image_id).name))
+        << cluster_model.GetImage(image_id).name;
   }
 }
 
@@ -94,14 +99,15 @@ TEST_F(MapperClustersTest, ClusterFileWithAnUnknownImageIsAOneLineError) {
   EXPECT_FALSE(fs::exists(dir_ / "out" / "sparse"));
 
   WriteTextFileAtomically(cluster_file, "image image0001.png\npair image0001.png image0002.png\n");
-  test::ExpectFailsWithOneLineError(test::RunParallax(arguments, dir_), cluster_file.string() + ": line 2",
+  test::ExpectFailsWithOneLineError(test::RunParallax(arguments, dir_),
+                                    cluster_file.string() + ": line 2",
                                     "pair needs two image names separated by a tab");
-  test::ExpectFailsWithOneLineError(test::RunParallax({"mapper", "--database", database_path_.string(),
-                                                       "--image-path", dir_.string(), "--output",
-                                                       (dir_ / "out").string(), "--cluster",
-                                                       (dir_ / "missing.txt").string()},
-                                                      dir_),
-                                    (dir_ / "missing.txt").string(), "");
+  test::ExpectFailsWithOneLineError(
+      test::RunParallax(
+          {"mapper", "--database", database_path_.string(), "--image-path", dir_.string(),
+           "--output", (dir_ / "out").string(), "--cluster", (dir_ / "missing.txt").string()},
+          dir_),
+      (dir_ / "missing.txt").string(), "");
 }
 
 }  // namespace

@@ -18,7 +18,8 @@ int RunMapper(int argc, char** argv) {
   uint64_t seed = 0;
   MappingStageOptions options;
   app.add_option("--database", database_path, "Feature and match database")->required();
-  app.add_option("--image-path", image_path, "Folder of the images (for point colours)")->required();
+  app.add_option("--image-path", image_path, "Folder of the images (for point colours)")
+      ->required();
   app.add_option("--output", output, "Output folder (sparse/<k>/, points.ply, summary.json)")
       ->required();
   app.add_option("--seed", seed, "Random seed")->capture_default_str();
@@ -31,8 +32,9 @@ int RunMapper(int argc, char** argv) {
   return RunCommand(app, argc, argv, flags, [&] {
     options.mapper.absolute_pose.ransac.random_seed = seed;
     if (!options.cluster_file.empty() && options.mapper_type == MapperType::kHierarchical) {
-      throw InputError("--cluster maps one cluster incrementally; it cannot be combined with "
-                       "--mapper hierarchical");
+      throw InputError(
+          "--cluster maps one cluster incrementally; it cannot be combined with "
+          "--mapper hierarchical");
     }
     if (!std::filesystem::exists(database_path)) {
       throw InputError(database_path + ": database does not exist");
@@ -49,7 +51,8 @@ int RunMapper(int argc, char** argv) {
       std::cerr << "error: no model could be started: " << result.summary.failure << std::endl;
       return 1;
     }
-    WriteRunSummary(BuildRunSummary(result, timings), std::filesystem::path(output) / "summary.json");
+    WriteRunSummary(BuildRunSummary(result, timings),
+                    std::filesystem::path(output) / "summary.json");
     return 0;
   });
 }

@@ -39,7 +39,8 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option_function<int>(
          "--ba-threads",
          [&mapper](int num_threads) {
-           for (BundleAdjustmentOptions* ba : mapper.BundleAdjustments()) ba->num_threads = num_threads;
+           for (BundleAdjustmentOptions* ba : mapper.BundleAdjustments())
+             ba->num_threads = num_threads;
          },
          "Threads for bundle adjustment (-1: all; any fixed count gives bit-identical runs, "
          "except with --ba-solver ceres above 150 images, where Ceres' threaded Schur "
@@ -82,11 +83,11 @@ void PrintMappingResult(const MappingStageResult& result, const std::filesystem:
   for (size_t index = 0; index < result.models.size(); ++index) {
     const Reconstruction& model = result.models[index];
     Reconstruction copy = model;
-    std::cout << "model " << index << ": " << model.NumRegImages() << "/" << result.image_names.size()
-              << " images registered, " << model.NumPoints3D() << " points, mean track length "
-              << model.ComputeMeanTrackLength() << ", mean reprojection error "
-              << copy.UpdatePointErrors() << " px -> " << (output_dir / "sparse" / std::to_string(index)).string()
-              << "\n";
+    std::cout << "model " << index << ": " << model.NumRegImages() << "/"
+              << result.image_names.size() << " images registered, " << model.NumPoints3D()
+              << " points, mean track length " << model.ComputeMeanTrackLength()
+              << ", mean reprojection error " << copy.UpdatePointErrors() << " px -> "
+              << (output_dir / "sparse" / std::to_string(index)).string() << "\n";
   }
 }
 

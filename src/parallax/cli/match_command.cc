@@ -94,8 +94,8 @@ int RunMatch(int argc, char** argv) {
     }
     std::cout << "match: " << stats.num_pairs << " pairs, " << stats.num_matched << " matched, "
               << stats.num_skipped << " already verified, " << stats.num_verified << " verified, "
-              << stats.num_preemptive_rejected << " stopped by the preemptive test; " << stats.seconds
-              << " s" << std::endl;
+              << stats.num_preemptive_rejected << " stopped by the preemptive test; "
+              << stats.seconds << " s" << std::endl;
     return 0;
   });
 }

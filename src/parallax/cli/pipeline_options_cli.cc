@@ -10,7 +10,9 @@ void AddExtractionOptions(CLI::App& app, ExtractionStageOptions* options) {
                  "SIMPLE_RADIAL, or PINHOLE with known intrinsics)");
   auto* params_option = app.add_option_function<std::string>(
       "--camera-params",
-      [options](const std::string& text) { options->camera.camera_params = ParseCameraParams(text); },
+      [options](const std::string& text) {
+        options->camera.camera_params = ParseCameraParams(text);
+      },
       "Intrinsics in the model's order, e.g. fx,fy,cx,cy");
   auto* intrinsics_option = app.add_option("--intrinsics", options->camera.intrinsics_path,
                                            "Text file with the 3x3 calibration matrix K")
@@ -72,12 +74,14 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
                  "Auto mode: match every pair up to this many images")
       ->capture_default_str()
       ->check(CLI::Range(2, 1000000));
-  app.add_option("--overlap", pairs.sequential_overlap, "Sequential mode: neighbours matched per image")
+  app.add_option("--overlap", pairs.sequential_overlap,
+                 "Sequential mode: neighbours matched per image")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_option("--vocab-tree", pairs.retrieval.vocab_tree_path,
-                 "Retrieval: a vocabulary tree saved by an earlier run (default: the one beside the "
-                 "database, or one trained on this collection and saved there)")
+  app.add_option(
+         "--vocab-tree", pairs.retrieval.vocab_tree_path,
+         "Retrieval: a vocabulary tree saved by an earlier run (default: the one beside the "
+         "database, or one trained on this collection and saved there)")
       ->check(CLI::ExistingFile);
   app.add_option("--retrieval-neighbors", pairs.retrieval.num_neighbors,
                  "Retrieval: most similar images matched per image")
@@ -126,7 +130,8 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
   app.add_option("--ratio", options->matching.max_ratio, "Lowe's ratio test threshold")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  app.add_flag("!--no-cross-check", options->matching.cross_check, "Keep matches that are not mutual");
+  app.add_flag("!--no-cross-check", options->matching.cross_check,
+               "Keep matches that are not mutual");
   app.add_option("--max-error", options->geometry.ransac.max_error,
                  "Geometric verification RANSAC threshold, pixels")
       ->capture_default_str()

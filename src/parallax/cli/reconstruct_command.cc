@@ -19,7 +19,8 @@ int RunReconstruct(int argc, char** argv) {
   app.add_option("--output", output_dir,
                  "Output folder: sparse/<k>/, points.ply, summary.json, database.db")
       ->required();
-  app.add_option("--database", database_path, "Database to use or resume (default OUT/database.db)");
+  app.add_option("--database", database_path,
+                 "Database to use or resume (default OUT/database.db)");
   app.add_option("--threads", num_threads, "Worker threads for every stage (-1: all cores)")
       ->capture_default_str();
   app.add_option("--seed", seed,
@@ -49,8 +50,8 @@ int RunReconstruct(int argc, char** argv) {
         RunReconstructionPipeline(options, image_dir, output_dir);
     PrintMappingResult(result.mapping, output_dir);
     if (!result.Success()) {
-      std::cerr << "error: " << image_dir << ": no model could be started: "
-                << result.mapping.summary.failure << std::endl;
+      std::cerr << "error: " << image_dir
+                << ": no model could be started: " << result.mapping.summary.failure << std::endl;
       return 1;
     }
     if (!result.report_path.empty()) std::cout << "report: " << result.report_path.string() << "\n";
@@ -59,8 +60,9 @@ int RunReconstruct(int argc, char** argv) {
       std::cout << stage << ": " << seconds << " s\n";
       total += seconds;
     }
-    std::cout << "total: " << total << " s; summary: "
-              << (std::filesystem::path(output_dir) / "summary.json").string() << std::endl;
+    std::cout << "total: " << total
+              << " s; summary: " << (std::filesystem::path(output_dir) / "summary.json").string()
+              << std::endl;
     return 0;
   });
 }

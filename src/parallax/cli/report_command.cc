@@ -19,7 +19,8 @@ int RunReport(int argc, char** argv) {
                "parallax report");
   std::string output, gt_path, image_path, database_path, model_path;
   app.add_option("output", output, "Output folder of `parallax reconstruct`")->required();
-  app.add_option("--gt", gt_path, "Ground truth to compare with (*_par.txt, *.camera folder or COLMAP model)");
+  app.add_option("--gt", gt_path,
+                 "Ground truth to compare with (*_par.txt, *.camera folder or COLMAP model)");
   app.add_option("--images", image_path, "Image folder (default: OUT/images when it exists)");
   app.add_option("--database", database_path, "Database (default: OUT/database.db)");
   app.add_option("--model", model_path, "Model folder (default: OUT/sparse/0)");
@@ -57,7 +58,8 @@ int RunReport(int argc, char** argv) {
     }
 
     if (!image_path.empty()) {
-      if (!fs::is_directory(image_path)) throw InputError(image_path + ": image folder does not exist");
+      if (!fs::is_directory(image_path))
+        throw InputError(image_path + ": image folder does not exist");
       inputs.image_dir = image_path;
     } else if (inputs.summary.is_object() && inputs.summary.contains("image_path") &&
                inputs.summary["image_path"].is_string() &&

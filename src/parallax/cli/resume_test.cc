@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
-#include <nlohmann/json.hpp>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <regex>
 
@@ -65,8 +65,9 @@ class ResumeTest : public ::testing::Test {
   }
 
   static std::vector<std::string> Command(const fs::path& out) {
-    return {"reconstruct", "--images", (scene_->path() / "images").string(), "--output",
-            out.string(),  "--threads", "2", "--seed", "3"};
+    return {"reconstruct", "--images",   (scene_->path() / "images").string(),
+            "--output",    out.string(), "--threads",
+            "2",           "--seed",     "3"};
   }
 
   // Starts the command and sends it `signal` once `ready(out, stderr)` holds; retries (a

@@ -8,9 +8,10 @@
 namespace parallax::cli {
 
 int RunSynth(int argc, char** argv) {
-  CLI::App app("Render a synthetic temple scene with exact cameras (images, <name>_par.txt, K.txt, "
-               "gt/ COLMAP model)",
-               "parallax synth");
+  CLI::App app(
+      "Render a synthetic temple scene with exact cameras (images, <name>_par.txt, K.txt, "
+      "gt/ COLMAP model)",
+      "parallax synth");
   std::string output_dir, layout = "ring", antialiasing = "quincunx";
   SyntheticSceneOptions options;
   bool no_shadows = false;
@@ -28,8 +29,9 @@ int RunSynth(int argc, char** argv) {
                  "aerial: share of the views tilted 30 degrees off nadir")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--gps-noise", options.gps_noise,
-                 "aerial: standard deviation in metres of the EXIF GPS noise (twice that in height)")
+  app.add_option(
+         "--gps-noise", options.gps_noise,
+         "aerial: standard deviation in metres of the EXIF GPS noise (twice that in height)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   std::string image_size;
@@ -44,7 +46,8 @@ int RunSynth(int argc, char** argv) {
   app.add_option("--focal", options.focal_length, "Focal length in pixels (0: 0.9 * width)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--seed", options.seed, "Seed of textures, poses, lighting and noise")->capture_default_str();
+  app.add_option("--seed", options.seed, "Seed of textures, poses, lighting and noise")
+      ->capture_default_str();
   app.add_option("--noise", options.noise_stddev, "Pixel noise standard deviation in grey levels")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
@@ -59,21 +62,23 @@ int RunSynth(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"none", "quincunx", "grid3x3"}));
   app.add_flag("--no-shadows", no_shadows, "Do not cast sun shadows");
-  app.add_option("--name", options.name, "Prefix of the camera file <name>_par.txt")->capture_default_str();
-  app.add_option("--threads", options.num_threads, "Worker threads (-1: all cores)")->capture_default_str();
+  app.add_option("--name", options.name, "Prefix of the camera file <name>_par.txt")
+      ->capture_default_str();
+  app.add_option("--threads", options.num_threads, "Worker threads (-1: all cores)")
+      ->capture_default_str();
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
     options.layout = SyntheticSceneLayoutFromName(layout);
     if (!image_size.empty()) ParseDimensions(image_size, &options.width, &options.height);
-    options.antialiasing = antialiasing == "none"       ? Antialiasing::kNone
+    options.antialiasing = antialiasing == "none"      ? Antialiasing::kNone
                            : antialiasing == "grid3x3" ? Antialiasing::kGrid3x3
                                                        : Antialiasing::kQuincunx;
     options.shadows = !no_shadows;
     const Timer timer;
     const Reconstruction views = GenerateSyntheticScene(options, output_dir);
-    std::cout << "synth: " << views.NumImages() << " views (" << layout << ", " << options.width << "x"
-              << options.height << ", f = " << options.EffectiveFocalLength() << " px) in "
+    std::cout << "synth: " << views.NumImages() << " views (" << layout << ", " << options.width
+              << "x" << options.height << ", f = " << options.EffectiveFocalLength() << " px) in "
               << output_dir << "; cameras in " << options.name << "_par.txt, K.txt, gt/; "
               << timer.ElapsedSeconds() << " s" << std::endl;
     return 0;

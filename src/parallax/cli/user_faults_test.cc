@@ -121,10 +121,11 @@ TEST_F(UserFaultsTest, SecondRunOnTheSameOutputStopsBeforeTouchingAnything) {
   fs::create_directories(out_);
   const RunLock held(OutputLockPath(out_), "test");
   const ProcessResult second = Run(Reconstruct());
-  test::ExpectFailsWithOneLineError(
-      second, out_.string() + ": in use by another parallax run (process " +
-                  std::to_string(getpid()) + "); wait for it to finish or stop it",
-      "then run this command again");
+  test::ExpectFailsWithOneLineError(second,
+                                    out_.string() + ": in use by another parallax run (process " +
+                                        std::to_string(getpid()) +
+                                        "); wait for it to finish or stop it",
+                                    "then run this command again");
   EXPECT_EQ(std::count(second.err.begin(), second.err.end(), '\n'), 1) << second.err;
   EXPECT_FALSE(fs::exists(out_ / "database.db"));
 }

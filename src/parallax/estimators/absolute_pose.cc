@@ -13,9 +13,7 @@
 
 namespace parallax {
 
-void AbsolutePoseEstimationOptions::Check() const {
-  ransac.Check();
-}
+void AbsolutePoseEstimationOptions::Check() const { ransac.Check(); }
 
 void AbsolutePoseRefinementOptions::Check() const {
   PARALLAX_CHECK_GT(loss_scale_px, 0.0);

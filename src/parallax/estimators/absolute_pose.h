@@ -39,7 +39,7 @@ AbsolutePoseReport EstimateAbsolutePose(const Camera& camera,
                                         const AbsolutePoseEstimationOptions& options);
 
 struct AbsolutePoseRefinementOptions {
-  double loss_scale_px = 1.0;     // Cauchy loss scale on reprojection error, pixels.
+  double loss_scale_px = 1.0;  // Cauchy loss scale on reprojection error, pixels.
   int max_num_iterations = 100;
   bool refine_focal_length = false;
   bool refine_extra_params = false;

@@ -51,9 +51,10 @@ BundleAdjustmentSummary BundleAdjust(const BundleAdjustmentOptions& options,
       CreateLossFunction(options.loss_function, options.loss_scale_px);
   BundleAdjustmentSolver solver = options.solver;
   if (solver == BundleAdjustmentSolver::kAuto) {
-    solver = NumReducedCameraVariables(problem) <= static_cast<size_t>(options.max_dense_schur_variables)
-                 ? BundleAdjustmentSolver::kDenseSchur
-                 : BundleAdjustmentSolver::kSparseSchur;
+    solver =
+        NumReducedCameraVariables(problem) <= static_cast<size_t>(options.max_dense_schur_variables)
+            ? BundleAdjustmentSolver::kDenseSchur
+            : BundleAdjustmentSolver::kSparseSchur;
   }
   switch (solver) {
     case BundleAdjustmentSolver::kDenseSchur:

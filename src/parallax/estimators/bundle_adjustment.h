@@ -31,7 +31,7 @@ struct BundleAdjustmentOptions {
   // The sparse Schur LM's linear solve.
   ConjugateGradientOptions conjugate_gradient;
   LossFunctionType loss_function = LossFunctionType::kCauchy;
-  double loss_scale_px = 1.0;         // Robust loss scale on reprojection error, pixels.
+  double loss_scale_px = 1.0;  // Robust loss scale on reprojection error, pixels.
   bool refine_focal_length = false;
   bool refine_principal_point = false;
   bool refine_extra_params = false;
@@ -39,8 +39,8 @@ struct BundleAdjustmentOptions {
   double function_tolerance = 1e-6;
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-8;
-  int num_threads = -1;               // -1: all cores.
-  bool print_summary = false;         // Ceres' report to the log at debug level.
+  int num_threads = -1;        // -1: all cores.
+  bool print_summary = false;  // Ceres' report to the log at debug level.
   void Check() const;
 };
 
@@ -61,14 +61,14 @@ struct BundleAdjustmentConfig {
 
 struct BundleAdjustmentSummary {
   bool success = false;
-  double initial_cost = 0;       // Ceres cost (0.5 sum of squared robustified residuals).
+  double initial_cost = 0;  // Ceres cost (0.5 sum of squared robustified residuals).
   double final_cost = 0;
   int num_iterations = 0;
   size_t num_residuals = 0;
   double seconds = 0;
-  std::string termination;       // Termination type and message (Ceres' wording).
-  std::string solver;            // Which solver ran, e.g. "dense Schur LM" or "Ceres SPARSE_SCHUR".
-  int num_linear_iterations = 0; // Conjugate-gradient iterations of the sparse Schur LM.
+  std::string termination;  // Termination type and message (Ceres' wording).
+  std::string solver;       // Which solver ran, e.g. "dense Schur LM" or "Ceres SPARSE_SCHUR".
+  int num_linear_iterations = 0;  // Conjugate-gradient iterations of the sparse Schur LM.
 };
 
 // Minimises reprojection error over poses, points and (optionally) intrinsics:

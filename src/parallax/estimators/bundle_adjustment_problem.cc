@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <map>
+#include <set>
 #include <unordered_map>
 #include <unordered_set>
-#include <set>
 
 #include "parallax/util/check.h"
 
@@ -80,7 +80,8 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
     pose.cam_from_world = &reconstruction->GetImage(image_id).cam_from_world;
     pose.constant = constant || config.constant_poses.count(image_id) > 0;
     for (int c = 0; c < 3; ++c) {
-      pose.constant_translation[c] = config.constant_translation_coordinates.count({image_id, c}) > 0;
+      pose.constant_translation[c] =
+          config.constant_translation_coordinates.count({image_id, c}) > 0;
     }
     pose_index.emplace(image_id, static_cast<int>(problem.poses.size()));
     problem.poses.push_back(pose);
@@ -114,14 +115,16 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
   for (const image_t image_id : config.images) {
     const Image& image = reconstruction->GetImage(image_id);
     for (const Point2D& point2D : image.points2D) {
-      if (point2D.HasPoint3D()) add_observation(image, point2D.xy, point_index.at(point2D.point3D_id));
+      if (point2D.HasPoint3D())
+        add_observation(image, point2D.xy, point_index.at(point2D.point3D_id));
     }
   }
   for (size_t j = 0; j < point3D_ids.size(); ++j) {
     for (const TrackElement& element : reconstruction->GetPoint3D(point3D_ids[j]).track.elements) {
       // Outside images were posed after the config's.
       const auto pose = pose_index.find(element.image_id);
-      if (pose == pose_index.end() || pose->second < static_cast<int>(config.images.size())) continue;
+      if (pose == pose_index.end() || pose->second < static_cast<int>(config.images.size()))
+        continue;
       const Image& image = reconstruction->GetImage(element.image_id);
       add_observation(image, image.points2D[element.point2D_idx].xy, static_cast<int>(j));
     }

@@ -34,7 +34,7 @@ struct BundleAdjustmentProblem {
     bool IsVariable() const { return !free_params.empty() && num_observations > 0; }
   };
   struct Observation {
-    int pose = 0;    // Indices into poses, points, cameras.
+    int pose = 0;  // Indices into poses, points, cameras.
     int point = 0;
     int camera = 0;
     Eigen::Vector2d xy;

@@ -387,9 +387,12 @@ INSTANTIATE_TEST_SUITE_P(, BundleAdjustmentSolvers,
                                            BundleAdjustmentSolver::kCeres),
                          [](const auto& info) {
                            switch (info.param) {
-                             case BundleAdjustmentSolver::kCeres: return "Ceres";
-                             case BundleAdjustmentSolver::kSparseSchur: return "SparseSchur";
-                             default: return "DenseSchur";
+                             case BundleAdjustmentSolver::kCeres:
+                               return "Ceres";
+                             case BundleAdjustmentSolver::kSparseSchur:
+                               return "SparseSchur";
+                             default:
+                               return "DenseSchur";
                            }
                          });
 
@@ -421,7 +424,8 @@ TEST(BundleAdjustment, SolversReachTheSameMinimum) {
   }
   EXPECT_EQ(summaries[0].solver, "dense Schur LM");
   EXPECT_EQ(summaries[1].solver, "Ceres DENSE_SCHUR");
-  EXPECT_NEAR(summaries[0].initial_cost, summaries[1].initial_cost, 1e-9 * summaries[1].initial_cost);
+  EXPECT_NEAR(summaries[0].initial_cost, summaries[1].initial_cost,
+              1e-9 * summaries[1].initial_cost);
   EXPECT_NEAR(summaries[0].final_cost, summaries[1].final_cost, 1e-9 * summaries[1].final_cost);
   EXPECT_LT(summaries[0].final_cost, 0.1 * summaries[0].initial_cost);
   const SceneErrors difference = CompareToTruth(results[1], results[0]);
@@ -432,7 +436,8 @@ TEST(BundleAdjustment, SolversReachTheSameMinimum) {
 
   EXPECT_EQ(summaries[2].solver, "sparse Schur LM (conjugate gradients)");
   EXPECT_GT(summaries[2].num_linear_iterations, 0);
-  EXPECT_NEAR(summaries[2].initial_cost, summaries[0].initial_cost, 1e-9 * summaries[0].initial_cost);
+  EXPECT_NEAR(summaries[2].initial_cost, summaries[0].initial_cost,
+              1e-9 * summaries[0].initial_cost);
   EXPECT_NEAR(summaries[2].final_cost, summaries[0].final_cost, 1e-6 * summaries[0].final_cost);
   const SceneErrors sparse_difference = CompareToTruth(results[0], results[2]);
   EXPECT_LT(sparse_difference.max_center, 1e-5);
@@ -456,9 +461,9 @@ TEST(BundleAdjustment, AutoPicksSolverBySize) {
 }
 
 TEST(BundleAdjustment, SolverNames) {
-  for (const auto solver :
-       {BundleAdjustmentSolver::kAuto, BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kSparseSchur,
-        BundleAdjustmentSolver::kCeres, BundleAdjustmentSolver::kCeresIterative}) {
+  for (const auto solver : {BundleAdjustmentSolver::kAuto, BundleAdjustmentSolver::kDenseSchur,
+                            BundleAdjustmentSolver::kSparseSchur, BundleAdjustmentSolver::kCeres,
+                            BundleAdjustmentSolver::kCeresIterative}) {
     bool found = false;
     for (const char* name : {"auto", "dense-schur", "sparse-schur", "ceres", "ceres-iterative"}) {
       found |= BundleAdjustmentSolverFromName(name) == solver;
@@ -502,7 +507,8 @@ TEST(BundleAdjustment, DISABLED_Timing47Images8000Points) {
         "BA 47 images, 8000 points, %zu observations, %s: %.3f s wall (%.3f s in BundleAdjust), "
         "%d iterations, cost %.6g -> %.6g, %s\n",
         summary.num_residuals, summary.solver.c_str(), timer.ElapsedSeconds(), summary.seconds,
-        summary.num_iterations, summary.initial_cost, summary.final_cost, summary.termination.c_str());
+        summary.num_iterations, summary.initial_cost, summary.final_cost,
+        summary.termination.c_str());
     EXPECT_TRUE(summary.success);
   }
 }

@@ -118,8 +118,8 @@ BundleAdjustmentSummary SolveWithCeres(const BundleAdjustmentOptions& options,
     Camera& camera = *problem->cameras[observation.camera].camera;
     ceres_problem.AddResidualBlock(
         CreateReprojectionErrorCostFunction(camera.model_id, observation.xy), loss,
-        rotation_of(pose), translation_of(pose), arena(problem->points[observation.point].xyz->data()),
-        arena(camera.params.data()));
+        rotation_of(pose), translation_of(pose),
+        arena(problem->points[observation.point].xyz->data()), arena(camera.params.data()));
   }
   summary.num_residuals = static_cast<size_t>(ceres_problem.NumResidualBlocks());
 
@@ -178,7 +178,8 @@ BundleAdjustmentSummary SolveWithCeres(const BundleAdjustmentOptions& options,
     ordering->AddElementToGroup(translation_of(pose), 1);
   }
   for (const auto& block : problem->cameras) {
-    if (block.num_observations > 0) ordering->AddElementToGroup(arena(block.camera->params.data()), 1);
+    if (block.num_observations > 0)
+      ordering->AddElementToGroup(arena(block.camera->params.data()), 1);
   }
 
   ceres::Solver::Options solver_options;
@@ -203,8 +204,8 @@ BundleAdjustmentSummary SolveWithCeres(const BundleAdjustmentOptions& options,
   if (options.print_summary) {
     PARALLAX_LOG(Debug) << ceres_summary.FullReport();
   }
-  summary.solver = std::string("Ceres ") +
-                   ceres::LinearSolverTypeToString(solver_options.linear_solver_type);
+  summary.solver =
+      std::string("Ceres ") + ceres::LinearSolverTypeToString(solver_options.linear_solver_type);
   summary.success = ceres_summary.IsSolutionUsable();
   summary.initial_cost = ceres_summary.initial_cost;
   summary.final_cost = ceres_summary.final_cost;

@@ -11,7 +11,6 @@ namespace parallax {
 // solver (dense for few images, sparse otherwise), multi-threaded. `loss` may be nullptr
 // (squared loss). Writes the solution into the reconstruction the problem points into.
 BundleAdjustmentSummary SolveWithCeres(const BundleAdjustmentOptions& options,
-                                       ceres::LossFunction* loss,
-                                       BundleAdjustmentProblem* problem);
+                                       ceres::LossFunction* loss, BundleAdjustmentProblem* problem);
 
 }  // namespace parallax

@@ -87,7 +87,9 @@ size_t BlockSparseReducedMatrix::DiagonalIndex(int d) const {
 
 double BlockSparseReducedMatrix::Diagonal(int d) const { return values_[DiagonalIndex(d)]; }
 
-void BlockSparseReducedMatrix::AddToDiagonal(int d, double value) { values_[DiagonalIndex(d)] += value; }
+void BlockSparseReducedMatrix::AddToDiagonal(int d, double value) {
+  values_[DiagonalIndex(d)] += value;
+}
 
 // y = S x from the lower blocks: block (r, c) adds B x_c to y_r and, off the diagonal,
 // B^T x_r to y_c.

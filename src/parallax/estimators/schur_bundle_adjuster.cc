@@ -76,7 +76,7 @@ class SchurSolver {
   static constexpr bool kSparse = std::is_same_v<ReducedMatrix, BlockSparseReducedMatrix>;
 
   SchurSolver(const BundleAdjustmentOptions& options, const ceres::LossFunction* loss,
-                   BundleAdjustmentProblem* problem)
+              BundleAdjustmentProblem* problem)
       : options_(options), loss_(loss), problem_(*problem) {
     Layout();
     CopyIn();
@@ -127,17 +127,19 @@ class SchurSolver {
   std::vector<ObservationJacobian> jacobians_;  // In observation_order_.
   // The k-th observation's intrinsics Jacobian, 2 x its camera's free parameters.
   Eigen::Map<Matrix2X> CameraJacobian(size_t k, int dim) {
-    return Eigen::Map<Matrix2X>(camera_jacobian_values_.data() + k * camera_jacobian_stride_, 2, dim);
+    return Eigen::Map<Matrix2X>(camera_jacobian_values_.data() + k * camera_jacobian_stride_, 2,
+                                dim);
   }
   Eigen::Map<const Matrix2X> CameraJacobian(size_t k, int dim) const {
-    return Eigen::Map<const Matrix2X>(camera_jacobian_values_.data() + k * camera_jacobian_stride_, 2, dim);
+    return Eigen::Map<const Matrix2X>(camera_jacobian_values_.data() + k * camera_jacobian_stride_,
+                                      2, dim);
   }
   // Only when some camera is free: per observation, room for the widest free camera (2 x 2
   // for SIMPLE_RADIAL's focal length and k1, where a fixed 2 x 8 took four times the memory).
   std::vector<double> camera_jacobian_values_;
   size_t camera_jacobian_stride_ = 0;
   ReducedMatrixStructure structure_;
-  ReducedMatrix u_;                             // Lower triangle.
+  ReducedMatrix u_;  // Lower triangle.
   Eigen::VectorXd g_camera_;
   std::vector<Eigen::Matrix3d> v_;
   std::vector<Eigen::Vector3d> g_point_;
@@ -167,9 +169,8 @@ void SchurSolver<ReducedMatrix>::Layout() {
   for (size_t c = 0; c < num_cameras; ++c) {
     const auto& block = problem_.cameras[c];
     const CameraModelId model_id = block.camera->model_id;
-    project_[c] = VisitCameraModel(model_id, []<typename Model>() -> ProjectFn {
-      return &ProjectWithJacobians<Model>;
-    });
+    project_[c] = VisitCameraModel(
+        model_id, []<typename Model>() -> ProjectFn { return &ProjectWithJacobians<Model>; });
     img_from_cam_[c] = VisitCameraModel(model_id, []<typename Model>() -> ImgFromCamFn {
       return &Model::template ImgFromCam<double>;
     });
@@ -205,10 +206,11 @@ void SchurSolver<ReducedMatrix>::Layout() {
   chunk_begin_.push_back(static_cast<int>(num_points));
 
   jacobians_.resize(num_observations);
-  const bool any_free_camera =
-      std::any_of(camera_offset_.begin(), camera_offset_.end(), [](int offset) { return offset >= 0; });
+  const bool any_free_camera = std::any_of(camera_offset_.begin(), camera_offset_.end(),
+                                           [](int offset) { return offset >= 0; });
   if (any_free_camera) {
-    camera_jacobian_stride_ = 2 * static_cast<size_t>(*std::max_element(camera_dim_.begin(), camera_dim_.end()));
+    camera_jacobian_stride_ =
+        2 * static_cast<size_t>(*std::max_element(camera_dim_.begin(), camera_dim_.end()));
     camera_jacobian_values_.resize(num_observations * camera_jacobian_stride_);
   }
   v_.resize(num_points);
@@ -228,7 +230,8 @@ void SchurSolver<ReducedMatrix>::Layout() {
       for (size_t k = point_begin_[j]; k < point_begin_[j + 1]; ++k) {
         const auto& observation = problem_.observations[observation_order_[k]];
         if (pose_offset_[observation.pose] >= 0) offsets.push_back(pose_offset_[observation.pose]);
-        if (camera_offset_[observation.camera] >= 0) offsets.push_back(camera_offset_[observation.camera]);
+        if (camera_offset_[observation.camera] >= 0)
+          offsets.push_back(camera_offset_[observation.camera]);
       }
       structure_.Couple(offsets);
     }
@@ -246,7 +249,8 @@ void SchurSolver<ReducedMatrix>::CopyIn() {
     parameters_.translations.push_back(pose.cam_from_world->translation);
   }
   for (const auto& point : problem_.points) parameters_.points.push_back(*point.xyz);
-  for (const auto& block : problem_.cameras) parameters_.camera_params.push_back(block.camera->params);
+  for (const auto& block : problem_.cameras)
+    parameters_.camera_params.push_back(block.camera->params);
 }
 
 template <typename ReducedMatrix>
@@ -338,7 +342,8 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
         }
         const int pose_offset = pose_offset_[p];
         if (pose_offset >= 0) {
-          u->template Block<6, 6>(pose_offset, pose_offset).noalias() += jacobian.pose.transpose() * jacobian.pose;
+          u->template Block<6, 6>(pose_offset, pose_offset).noalias() +=
+              jacobian.pose.transpose() * jacobian.pose;
           g->segment<6>(pose_offset).noalias() += jacobian.pose.transpose() * jacobian.residual;
         }
         if (camera_offset >= 0) {
@@ -382,7 +387,7 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
 
 template <typename ReducedMatrix>
 bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* camera_step,
-                                   std::vector<Eigen::Vector3d>* point_step) {
+                                             std::vector<Eigen::Vector3d>* point_step) {
   const int n = num_camera_variables_;
   const auto damping = [radius](double diagonal) {
     return std::clamp(diagonal, kMinDiagonal, kMaxDiagonal) / radius;
@@ -423,8 +428,7 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
         }
         const int c = observation.camera;
         if (camera_offset_[c] >= 0) {
-          w_camera[a].noalias() =
-              CameraJacobian(k, camera_dim_[c]).transpose() * jacobian.point;
+          w_camera[a].noalias() = CameraJacobian(k, camera_dim_[c]).transpose() * jacobian.point;
           y_camera[a].noalias() = w_camera[a] * v_inverse_[j];
           b.segment(camera_offset_[c], camera_dim_[c]).noalias() += y_camera[a] * g_point_[j];
         }
@@ -435,15 +439,18 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
       int shared_camera = problem_.observations[observation_order_[begin]].camera;
       if (camera_offset_[shared_camera] < 0) shared_camera = -1;
       for (size_t a = 1; a < m && shared_camera >= 0; ++a) {
-        if (problem_.observations[observation_order_[begin + a]].camera != shared_camera) shared_camera = -1;
+        if (problem_.observations[observation_order_[begin + a]].camera != shared_camera)
+          shared_camera = -1;
       }
-      const auto cross = [&](int pose_offset, const Matrix63& y_or_w_pose, int camera_offset, int dim,
-                             const MatrixC3& w_or_y_camera) {
+      const auto cross = [&](int pose_offset, const Matrix63& y_or_w_pose, int camera_offset,
+                             int dim, const MatrixC3& w_or_y_camera) {
         if (pose_offset < 0 || camera_offset < 0) return;
         if (camera_offset > pose_offset) {
-          s.Block(camera_offset, pose_offset, dim, 6).noalias() -= w_or_y_camera * y_or_w_pose.transpose();
+          s.Block(camera_offset, pose_offset, dim, 6).noalias() -=
+              w_or_y_camera * y_or_w_pose.transpose();
         } else {
-          s.Block(pose_offset, camera_offset, 6, dim).noalias() -= y_or_w_pose * w_or_y_camera.transpose();
+          s.Block(pose_offset, camera_offset, 6, dim).noalias() -=
+              y_or_w_pose * w_or_y_camera.transpose();
         }
       };
       // Block (a, b) of the sum is Y_a W_b^T; only blocks on or below the diagonal are
@@ -460,20 +467,25 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
           const int dim_b = camera_dim_[obs_b.camera];
           if (pose_a >= 0 && pose_b >= 0) {
             if (pose_a > pose_b) {
-              s.template Block<6, 6>(pose_a, pose_b).noalias() -= y_pose[a] * w_pose[bi].transpose();
+              s.template Block<6, 6>(pose_a, pose_b).noalias() -=
+                  y_pose[a] * w_pose[bi].transpose();
             } else if (pose_a < pose_b) {
-              s.template Block<6, 6>(pose_b, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
+              s.template Block<6, 6>(pose_b, pose_a).noalias() -=
+                  w_pose[bi] * y_pose[a].transpose();
             } else {
               // The diagonal block; (a, b) and (b, a) both land here only if one image
               // observed the point twice.
-              s.template Block<6, 6>(pose_a, pose_a).noalias() -= y_pose[a] * w_pose[bi].transpose();
-              if (bi != a) s.template Block<6, 6>(pose_a, pose_a).noalias() -= w_pose[bi] * y_pose[a].transpose();
+              s.template Block<6, 6>(pose_a, pose_a).noalias() -=
+                  y_pose[a] * w_pose[bi].transpose();
+              if (bi != a)
+                s.template Block<6, 6>(pose_a, pose_a).noalias() -=
+                    w_pose[bi] * y_pose[a].transpose();
             }
           }
           if (camera_a >= 0 && camera_b >= 0 && shared_camera < 0) {
-            auto block = s.Block(std::max(camera_a, camera_b), std::min(camera_a, camera_b),
-                                 camera_a >= camera_b ? dim_a : dim_b,
-                                 camera_a >= camera_b ? dim_b : dim_a);
+            auto block =
+                s.Block(std::max(camera_a, camera_b), std::min(camera_a, camera_b),
+                        camera_a >= camera_b ? dim_a : dim_b, camera_a >= camera_b ? dim_b : dim_a);
             if (camera_a > camera_b) {
               block.noalias() -= y_camera[a] * w_camera[bi].transpose();
             } else if (camera_a < camera_b) {
@@ -500,8 +512,8 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
         const MatrixC3 y_sum = w_sum * v_inverse_[j];
         s.Block(offset, offset, dim, dim).noalias() -= y_sum * w_sum.transpose();
         for (size_t a = 0; a < m; ++a) {
-          cross(pose_offset_[problem_.observations[observation_order_[begin + a]].pose], y_pose[a], offset,
-                dim, w_sum);
+          cross(pose_offset_[problem_.observations[observation_order_[begin + a]].pose], y_pose[a],
+                offset, dim, w_sum);
         }
       }
     }
@@ -538,24 +550,24 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
 }
 
 template <typename ReducedMatrix>
-Eigen::Vector2d SchurSolver<ReducedMatrix>::CameraStepImage(size_t k,
-                                                  const Eigen::VectorXd& camera_step) const {
+Eigen::Vector2d SchurSolver<ReducedMatrix>::CameraStepImage(
+    size_t k, const Eigen::VectorXd& camera_step) const {
   const auto& observation = problem_.observations[observation_order_[k]];
   Eigen::Vector2d image = Eigen::Vector2d::Zero();
   const int pose_offset = pose_offset_[observation.pose];
   if (pose_offset >= 0) image += jacobians_[k].pose * camera_step.segment<6>(pose_offset);
   const int c = observation.camera;
   if (camera_offset_[c] >= 0) {
-    image += CameraJacobian(k, camera_dim_[c]) *
-             camera_step.segment(camera_offset_[c], camera_dim_[c]);
+    image +=
+        CameraJacobian(k, camera_dim_[c]) * camera_step.segment(camera_offset_[c], camera_dim_[c]);
   }
   return image;
 }
 
 // Ceres' model cost change of the linearised, loss-corrected residuals: -(J d)^T (r + J d / 2).
 template <typename ReducedMatrix>
-double SchurSolver<ReducedMatrix>::ModelCostChange(const Eigen::VectorXd& camera_step,
-                                         const std::vector<Eigen::Vector3d>& point_step) const {
+double SchurSolver<ReducedMatrix>::ModelCostChange(
+    const Eigen::VectorXd& camera_step, const std::vector<Eigen::Vector3d>& point_step) const {
   double change = 0;
   for (size_t k = 0; k < observation_order_.size(); ++k) {
     const auto& observation = problem_.observations[observation_order_[k]];
@@ -569,8 +581,8 @@ double SchurSolver<ReducedMatrix>::ModelCostChange(const Eigen::VectorXd& camera
 
 template <typename ReducedMatrix>
 void SchurSolver<ReducedMatrix>::ApplyStep(const Eigen::VectorXd& camera_step,
-                                 const std::vector<Eigen::Vector3d>& point_step,
-                                 Parameters* candidate) const {
+                                           const std::vector<Eigen::Vector3d>& point_step,
+                                           Parameters* candidate) const {
   *candidate = parameters_;
   for (size_t i = 0; i < problem_.poses.size(); ++i) {
     const int offset = pose_offset_[i];
@@ -580,7 +592,8 @@ void SchurSolver<ReducedMatrix>::ApplyStep(const Eigen::VectorXd& camera_step,
     if (angle > 0) {
       candidate->rotations[i] =
           (Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation_step / angle)) *
-           parameters_.rotations[i]).normalized();
+           parameters_.rotations[i])
+              .normalized();
     }
     candidate->translations[i] += camera_step.segment<3>(offset + 3);
   }
@@ -601,8 +614,8 @@ double SchurSolver<ReducedMatrix>::ParameterNorm(const Parameters& parameters) c
   double squared = 0;
   for (size_t i = 0; i < problem_.poses.size(); ++i) {
     if (pose_offset_[i] < 0) continue;
-    squared += parameters.rotations[i].coeffs().squaredNorm() +
-               parameters.translations[i].squaredNorm();
+    squared +=
+        parameters.rotations[i].coeffs().squaredNorm() + parameters.translations[i].squaredNorm();
   }
   for (size_t j = 0; j < problem_.points.size(); ++j) {
     if (!problem_.points[j].constant) squared += parameters.points[j].squaredNorm();
@@ -681,8 +694,9 @@ BundleAdjustmentSummary SchurSolver<ReducedMatrix>::Solve() {
         relative_decrease > kMinRelativeDecrease) {
       parameters_ = std::move(candidate);
       cost = Evaluate(parameters_, /*linearize=*/true);
-      radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0,
-                                                      1.0 - std::pow(2.0 * relative_decrease - 1.0, 3)));
+      radius =
+          std::min(kMaxRadius,
+                   radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * relative_decrease - 1.0, 3)));
       decrease_factor = 2.0;
       if (gradient_max_norm() <= options_.gradient_tolerance) {
         termination << "CONVERGENCE: gradient tolerance reached";
@@ -722,7 +736,8 @@ namespace {
 
 template <typename ReducedMatrix>
 BundleAdjustmentSummary SolveWithSchur(const BundleAdjustmentOptions& options,
-                                       const ceres::LossFunction* loss, BundleAdjustmentProblem* problem) {
+                                       const ceres::LossFunction* loss,
+                                       BundleAdjustmentProblem* problem) {
   PARALLAX_CHECK(problem != nullptr);
   SchurSolver<ReducedMatrix> solver(options, loss, problem);
   return solver.Solve();

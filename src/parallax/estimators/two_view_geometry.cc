@@ -54,7 +54,12 @@ struct TranslationEstimator {
 };
 
 // The RANSAC streams of one pair: each estimation draws from its own seed.
-enum RansacStream : uint64_t { kEssentialStream = 1, kFundamentalStream, kHomographyStream, kWatermarkStream };
+enum RansacStream : uint64_t {
+  kEssentialStream = 1,
+  kFundamentalStream,
+  kHomographyStream,
+  kWatermarkStream
+};
 
 // The pair's RANSAC options for one estimation: `max_error` in that model's unit.
 RansacOptions StreamRansacOptions(const TwoViewGeometryOptions& options, double max_error,
@@ -247,7 +252,8 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
   // turns into its bound on trials. The chance matches of a non-overlapping pair are few
   // (15-35 on templeRing), which makes this a few dozen to a few hundred trials instead of
   // the cap.
-  const auto bounded_options = [&](double max_error, RansacStream stream, double num_inliers_sought) {
+  const auto bounded_options = [&](double max_error, RansacStream stream,
+                                   double num_inliers_sought) {
     RansacOptions ransac_options = StreamRansacOptions(options, max_error, stream);
     ransac_options.min_inlier_ratio = std::clamp(
         num_inliers_sought / static_cast<double>(num_valid), options.ransac.min_inlier_ratio, 1.0);
@@ -363,13 +369,13 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
         Log10NumFalseAlarms(EssentialMatrixFivePointEstimator(), normalized1, normalized2,
                             E_report.model, E_max_error, num_inliers, chance_seed);
   } else if (chosen == &F_report) {
-    log10_num_false_alarms = Log10NumFalseAlarms(FundamentalMatrixSevenPointEstimator(), matched1,
-                                                 matched2, F_report.model, max_error_px,
-                                                 num_inliers, chance_seed);
+    log10_num_false_alarms =
+        Log10NumFalseAlarms(FundamentalMatrixSevenPointEstimator(), matched1, matched2,
+                            F_report.model, max_error_px, num_inliers, chance_seed);
   } else {
-    log10_num_false_alarms = Log10NumFalseAlarms(HomographyMatrixEstimator(), matched1, matched2,
-                                                 H_report.model, max_error_px, num_inliers,
-                                                 chance_seed);
+    log10_num_false_alarms =
+        Log10NumFalseAlarms(HomographyMatrixEstimator(), matched1, matched2, H_report.model,
+                            max_error_px, num_inliers, chance_seed);
   }
   if (log10_num_false_alarms > std::log10(options.max_num_false_alarms)) {
     PARALLAX_LOG(Debug) << "Two-view inliers (" << num_inliers << " of " << num_valid

@@ -34,8 +34,9 @@ double Log10BinomialTail(size_t n, size_t k, double p) {
   return (max_term + std::log(sum)) / std::log(10.0);
 }
 
-void ChancePairs(const std::vector<Eigen::Vector2d>& points1, const std::vector<Eigen::Vector2d>& points2,
-                 uint64_t seed, std::vector<Eigen::Vector2d>* chance1, std::vector<Eigen::Vector2d>* chance2) {
+void ChancePairs(const std::vector<Eigen::Vector2d>& points1,
+                 const std::vector<Eigen::Vector2d>& points2, uint64_t seed,
+                 std::vector<Eigen::Vector2d>* chance1, std::vector<Eigen::Vector2d>* chance2) {
   const size_t n = points1.size();
   chance1->clear();
   chance2->clear();

@@ -31,8 +31,9 @@ double Log10BinomialTail(size_t n, size_t k, double p);
 
 // The matched keypoints re-paired (x1_i with x2_j, i != j): all such pairs when few, else
 // 4,096 drawn from a generator seeded with `seed`.
-void ChancePairs(const std::vector<Eigen::Vector2d>& points1, const std::vector<Eigen::Vector2d>& points2,
-                 uint64_t seed, std::vector<Eigen::Vector2d>* chance1, std::vector<Eigen::Vector2d>* chance2);
+void ChancePairs(const std::vector<Eigen::Vector2d>& points1,
+                 const std::vector<Eigen::Vector2d>& points2, uint64_t seed,
+                 std::vector<Eigen::Vector2d>* chance1, std::vector<Eigen::Vector2d>* chance2);
 
 // log10 of the number of false alarms of a model with `num_inliers` of n matches, from the
 // chance p that an unrelated match is an inlier (see Log10NumFalseAlarms).
@@ -50,8 +51,9 @@ double Log10NumFalseAlarmsFromChance(size_t n, size_t sample_size, size_t num_in
 // (often a small part of them) rather than a uniform spread. Returns log10(NFA).
 template <typename Estimator>
 double Log10NumFalseAlarms(const Estimator& estimator, const std::vector<Eigen::Vector2d>& points1,
-                           const std::vector<Eigen::Vector2d>& points2, const Eigen::Matrix3d& model,
-                           double max_error, size_t num_inliers, uint64_t seed) {
+                           const std::vector<Eigen::Vector2d>& points2,
+                           const Eigen::Matrix3d& model, double max_error, size_t num_inliers,
+                           uint64_t seed) {
   const size_t n = points1.size();
   constexpr size_t s = Estimator::kMinNumSamples;
   if (num_inliers <= s || n <= s) return std::numeric_limits<double>::infinity();
@@ -61,7 +63,8 @@ double Log10NumFalseAlarms(const Estimator& estimator, const std::vector<Eigen::
   estimator.Residuals(chance1, chance2, model, &squared_residuals);
   const double max_squared_error = max_error * max_error;
   size_t num_chance_inliers = 0;
-  for (const double residual : squared_residuals) num_chance_inliers += residual <= max_squared_error;
+  for (const double residual : squared_residuals)
+    num_chance_inliers += residual <= max_squared_error;
   // One more inlier than seen: never p = 0 from a finite sample.
   const double p = static_cast<double>(num_chance_inliers + 1) /
                    static_cast<double>(squared_residuals.size() + 1);

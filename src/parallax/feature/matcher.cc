@@ -176,8 +176,8 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
     std::vector<float> tile(static_cast<size_t>(kColBlock) * stride);
     for (int c0 = 0; c0 < num2; c0 += kColBlock) {
       const int num_rows2 = std::min(kColBlock, num2 - c0);
-      ComputeSimilarities(block1_packed.data(), stride, values2.row(c0).data(), num_rows2,
-                          dim, tile.data());
+      ComputeSimilarities(block1_packed.data(), stride, values2.row(c0).data(), num_rows2, dim,
+                          tile.data());
       const size_t col_offset = block * static_cast<size_t>(num2) + c0;
       ScanTile(tile.data(), num_rows2, num_rows1, stride, c0, rows.best.data() + r0,
                rows.second.data() + r0, rows.best_index.data() + r0,

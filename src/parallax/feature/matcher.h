@@ -5,10 +5,10 @@
 namespace parallax {
 
 struct FeatureMatchingOptions {
-  double max_ratio = 0.8;      // Lowe's ratio test on Euclidean distances.
-  double max_distance = 0.7;   // Absolute bound on the (unit-vector) Euclidean distance.
-  bool cross_check = true;     // Keep only mutual nearest neighbours.
-  int num_threads = -1;        // -1: all cores.
+  double max_ratio = 0.8;     // Lowe's ratio test on Euclidean distances.
+  double max_distance = 0.7;  // Absolute bound on the (unit-vector) Euclidean distance.
+  bool cross_check = true;    // Keep only mutual nearest neighbours.
+  int num_threads = -1;       // -1: all cores.
   void Check() const;
 };
 

@@ -116,17 +116,17 @@ ReferenceMatching BruteForceMatch(const RowMatrixXd& distances,
     if (best_j < 0) continue;
     const bool accept = best <= options.max_distance && best < options.max_ratio * second &&
                         (!options.cross_check || best_row[best_j] == i);
-    const bool ambiguous =
-        (second - best < kMargin) ||
-        std::abs(best - options.max_distance) < kMargin ||
-        std::abs(best - options.max_ratio * second) < kMargin ||
-        (options.cross_check && column_ambiguous[best_j]);
+    const bool ambiguous = (second - best < kMargin) ||
+                           std::abs(best - options.max_distance) < kMargin ||
+                           std::abs(best - options.max_ratio * second) < kMargin ||
+                           (options.cross_check && column_ambiguous[best_j]);
     if (ambiguous) {
       ++reference.num_ambiguous;
       reference.ambiguous[i] = true;
       continue;
     }
-    if (accept) reference.matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(best_j)});
+    if (accept)
+      reference.matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(best_j)});
   }
   return reference;
 }
@@ -166,10 +166,14 @@ TEST(MatchDescriptors, RandomDescriptorsAgreeWithBruteForce) {
   const RowMatrixXd distances = BruteForceDistances(values1, values2);
   for (const bool cross_check : {false, true}) {
     for (const int num_threads : {1, 2, 3}) {
-      SCOPED_TRACE(testing::Message() << "cross_check " << cross_check << " threads " << num_threads);
-      ExpectMatchesAgree(values1, values2, distances, Options(0.8, 0.7, cross_check, num_threads), 3);
-      ExpectMatchesAgree(values1, values2, distances, Options(0.95, 2.0, cross_check, num_threads), 3);
-      ExpectMatchesAgree(values1, values2, distances, Options(0.8, 0.5, cross_check, num_threads), 3);
+      SCOPED_TRACE(testing::Message()
+                   << "cross_check " << cross_check << " threads " << num_threads);
+      ExpectMatchesAgree(values1, values2, distances, Options(0.8, 0.7, cross_check, num_threads),
+                         3);
+      ExpectMatchesAgree(values1, values2, distances, Options(0.95, 2.0, cross_check, num_threads),
+                         3);
+      ExpectMatchesAgree(values1, values2, distances, Options(0.8, 0.5, cross_check, num_threads),
+                         3);
     }
   }
 }
@@ -190,7 +194,8 @@ TEST(MatchDescriptors, QuantisedPermutedCopiesAreFoundExactly) {
   const int num = 700;
   FeatureDescriptors descriptors1(num, 128), descriptors2(num, 128);
   for (int i = 0; i < num; ++i) {
-    for (int k = 0; k < 128; ++k) descriptors1(i, k) = static_cast<uint8_t>(RandomUniformInteger(0, 120));
+    for (int k = 0; k < 128; ++k)
+      descriptors1(i, k) = static_cast<uint8_t>(RandomUniformInteger(0, 120));
   }
   std::vector<int> permutation(num);
   std::iota(permutation.begin(), permutation.end(), 0);
@@ -246,7 +251,8 @@ TEST(MatchDescriptors, DistanceBound) {
   const RowMatrixXf values1 = RandomUnitDescriptors(1);
   RowMatrixXf values2 = RandomUnitDescriptors(2);
   // Distance 0.5 exactly: a unit vector at angle theta with 2 sin(theta/2) = 0.5.
-  Eigen::RowVectorXf orthogonal = values2.row(0) - values2.row(0).dot(values1.row(0)) * values1.row(0);
+  Eigen::RowVectorXf orthogonal =
+      values2.row(0) - values2.row(0).dot(values1.row(0)) * values1.row(0);
   orthogonal.normalize();
   const float theta = 2.0f * std::asin(0.25f);
   values2.row(0) = std::cos(theta) * values1.row(0) + std::sin(theta) * orthogonal;
@@ -274,7 +280,8 @@ TEST(MatchDescriptors, SameResultForAnyThreadCount) {
   RowMatrixXf values2 = RandomUnitDescriptors(900);
   PlantMatches(values1, 600, 0.05, &values2);
   MatchableDescriptors descriptors1{values1}, descriptors2{values2};
-  const FeatureMatches single = MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.7, true, 1));
+  const FeatureMatches single =
+      MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.7, true, 1));
   EXPECT_GT(single.size(), 300u);
   for (const int num_threads : {2, 3, 7}) {
     EXPECT_EQ(MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.7, true, num_threads)),

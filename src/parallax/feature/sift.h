@@ -9,8 +9,8 @@ namespace parallax {
 
 // SIFT settings; defaults are the paper's (Lowe 2004 as configured in Zeeshan et al.).
 struct SiftExtractionOptions {
-  int max_num_features = 8192;       // Keep the strongest (largest response) keypoints.
-  int max_image_size = 3200;         // Downscale larger images (longest side), rescale keypoints.
+  int max_num_features = 8192;  // Keep the strongest (largest response) keypoints.
+  int max_image_size = 3200;    // Downscale larger images (longest side), rescale keypoints.
   // OpenCV's SIFT always doubles the image for its first octave (Lowe's -1 octave). Above this
   // longest side it is given the half-size image instead, so that octave lands at the image's
   // own resolution: the doubled octave is three quarters of the work, and on large images its
@@ -20,7 +20,7 @@ struct SiftExtractionOptions {
   double contrast_threshold = 0.04;  // OpenCV convention (divided by layers internally).
   double edge_threshold = 10.0;
   double sigma = 1.6;
-  bool root_sift = true;             // L1-normalise, square-root (Arandjelovic & Zisserman 2012).
+  bool root_sift = true;  // L1-normalise, square-root (Arandjelovic & Zisserman 2012).
   void Check() const;
 };
 

@@ -7,8 +7,8 @@
 #include <iostream>
 #include <opencv2/imgproc.hpp>
 
-#include "parallax/image/image_reader.h"
 #include "parallax/feature/matcher.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -32,7 +32,8 @@ cv::Mat TexturedImage(int width, int height, int num_blobs) {
       for (int x = std::max(0, static_cast<int>(cx) - radius);
            x < std::min(width, static_cast<int>(cx) + radius + 1); ++x) {
         const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-        image.at<float>(y, x) += static_cast<float>(amplitude * std::exp(-0.5 * r2 / (sigma * sigma)));
+        image.at<float>(y, x) +=
+            static_cast<float>(amplitude * std::exp(-0.5 * r2 / (sigma * sigma)));
       }
     }
   }
@@ -41,9 +42,7 @@ cv::Mat TexturedImage(int width, int height, int num_blobs) {
   return image8;
 }
 
-double AngleDifference(double a, double b) {
-  return std::abs(std::remainder(a - b, 2 * kPi));
-}
+double AngleDifference(double a, double b) { return std::abs(std::remainder(a - b, 2 * kPi)); }
 
 double Median(std::vector<double> values) {
   PARALLAX_CHECK(!values.empty());
@@ -61,7 +60,8 @@ TEST(Sift, RotatedAndScaledCopyIsMatchedConsistently) {
                  cv::Scalar(128));
   Eigen::Matrix2d linear;
   Eigen::Vector2d offset;
-  linear << warp.at<double>(0, 0), warp.at<double>(0, 1), warp.at<double>(1, 0), warp.at<double>(1, 1);
+  linear << warp.at<double>(0, 0), warp.at<double>(0, 1), warp.at<double>(1, 0),
+      warp.at<double>(1, 1);
   offset << warp.at<double>(0, 2), warp.at<double>(1, 2);
 
   const auto extractor = CreateSiftExtractor(SiftExtractionOptions());
@@ -162,7 +162,8 @@ TEST(Sift, LargeImagesAreDownscaledAndKeypointsRescaled) {
     EXPECT_FLOAT_EQ(keypoints_full[i].x, 2.0f * keypoints_half[i].x);
     EXPECT_FLOAT_EQ(keypoints_full[i].y, 2.0f * keypoints_half[i].y);
     EXPECT_NEAR(keypoints_full[i].ComputeScale(), 2.0f * keypoints_half[i].ComputeScale(), 1e-4);
-    EXPECT_NEAR(keypoints_full[i].ComputeOrientation(), keypoints_half[i].ComputeOrientation(), 1e-6);
+    EXPECT_NEAR(keypoints_full[i].ComputeOrientation(), keypoints_half[i].ComputeOrientation(),
+                1e-6);
   }
   EXPECT_EQ(descriptors_full, descriptors_half);
 }
@@ -270,7 +271,8 @@ TEST(Sift, TempleRingFigures) {
   ratio_only.max_distance = 2.0;  // Unit vectors are at most 2 apart: no bound.
   ratio_only.cross_check = false;
   const size_t num_ratio = MatchDescriptors(matchable1, matchable2, ratio_only).size();
-  const size_t num_default = MatchDescriptors(matchable1, matchable2, FeatureMatchingOptions()).size();
+  const size_t num_default =
+      MatchDescriptors(matchable1, matchable2, FeatureMatchingOptions()).size();
   std::cout << "templeR0001/0002: " << descriptors0001.rows() << " and " << descriptors0002.rows()
             << " keypoints; putative matches, ratio 0.8 only: " << num_ratio
             << ", with distance bound and cross-check (defaults): " << num_default

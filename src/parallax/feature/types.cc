@@ -4,8 +4,7 @@
 
 namespace parallax {
 
-FeatureKeypoint::FeatureKeypoint(float x, float y, float scale, float orientation)
-    : x(x), y(y) {
+FeatureKeypoint::FeatureKeypoint(float x, float y, float scale, float orientation) : x(x), y(y) {
   const float cos_o = std::cos(orientation), sin_o = std::sin(orientation);
   a11 = scale * cos_o;
   a12 = -scale * sin_o;

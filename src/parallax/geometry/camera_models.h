@@ -168,12 +168,18 @@ Eigen::Vector2d CameraModelCamFromImg(CameraModelId model_id, const std::vector<
 template <typename Visitor>
 decltype(auto) VisitCameraModel(CameraModelId model_id, Visitor&& visitor) {
   switch (model_id) {
-    case CameraModelId::kSimplePinhole: return visitor.template operator()<SimplePinholeModel>();
-    case CameraModelId::kPinhole: return visitor.template operator()<PinholeModel>();
-    case CameraModelId::kSimpleRadial: return visitor.template operator()<SimpleRadialModel>();
-    case CameraModelId::kRadial: return visitor.template operator()<RadialModel>();
-    case CameraModelId::kOpenCV: return visitor.template operator()<OpenCVModel>();
-    default: break;
+    case CameraModelId::kSimplePinhole:
+      return visitor.template operator()<SimplePinholeModel>();
+    case CameraModelId::kPinhole:
+      return visitor.template operator()<PinholeModel>();
+    case CameraModelId::kSimpleRadial:
+      return visitor.template operator()<SimpleRadialModel>();
+    case CameraModelId::kRadial:
+      return visitor.template operator()<RadialModel>();
+    case CameraModelId::kOpenCV:
+      return visitor.template operator()<OpenCVModel>();
+    default:
+      break;
   }
   ThrowInvalidCameraModel(static_cast<int>(model_id));
 }

@@ -119,7 +119,8 @@ TEST(EssentialMatrix, PoseFromEssentialMatrixRecoversExactPose) {
     EXPECT_LT(
         (estimated.rotation.toRotationMatrix() - cam2_from_cam1.rotation.toRotationMatrix()).norm(),
         1e-8);
-    EXPECT_THAT(estimated.translation, EigenMatrixNear(cam2_from_cam1.translation.normalized(), 1e-8));
+    EXPECT_THAT(estimated.translation,
+                EigenMatrixNear(cam2_from_cam1.translation.normalized(), 1e-8));
     // Every point passes cheirality and comes back at the unit-baseline scale.
     ASSERT_EQ(points3D.size(), points.size());
     const double scale = 1.0 / cam2_from_cam1.translation.norm();

@@ -38,8 +38,9 @@ TEST(Rigid3d, RotationAngle) {
 }
 
 TEST(Sim3d, TransformCameraPoseKeepsProjections) {
-  const Sim3d b_from_a(2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 1, 0).normalized())),
-                       Eigen::Vector3d(1, 2, 3));
+  const Sim3d b_from_a(
+      2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 1, 0).normalized())),
+      Eigen::Vector3d(1, 2, 3));
   const Rigid3d cam_from_a = RandomRigid(0.2, {0, 0, 1}, {0.1, 0.2, 5});
   const Rigid3d cam_from_b = TransformCameraPose(b_from_a, cam_from_a);
   const Eigen::Vector3d x_a(0.3, 0.1, 1.0);

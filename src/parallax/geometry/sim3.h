@@ -35,8 +35,10 @@ struct Sim3d {
 // Re-expresses a camera pose cam_from_a in frame b, given b_from_a. Cameras carry no scale,
 // so the camera frame is rescaled: the result maps b into the same camera.
 inline Rigid3d TransformCameraPose(const Sim3d& b_from_a, const Rigid3d& cam_from_a) {
-  const Eigen::Quaterniond rotation = (cam_from_a.rotation * b_from_a.rotation.inverse()).normalized();
-  return Rigid3d(rotation, b_from_a.scale * cam_from_a.translation - rotation * b_from_a.translation);
+  const Eigen::Quaterniond rotation =
+      (cam_from_a.rotation * b_from_a.rotation.inverse()).normalized();
+  return Rigid3d(rotation,
+                 b_from_a.scale * cam_from_a.translation - rotation * b_from_a.translation);
 }
 
 }  // namespace parallax

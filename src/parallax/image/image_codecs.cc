@@ -174,7 +174,7 @@ tmsize_t TiffWrite(thandle_t, void*, tmsize_t) { return -1; }
 
 toff_t TiffSeek(thandle_t handle, toff_t offset, int whence) {
   auto* memory = static_cast<TiffMemory*>(handle);
-  const toff_t base = whence == SEEK_SET ? 0
+  const toff_t base = whence == SEEK_SET   ? 0
                       : whence == SEEK_CUR ? memory->offset
                                            : static_cast<toff_t>(memory->bytes.size());
   memory->offset = base + offset;
@@ -203,7 +203,9 @@ cv::Mat DecodeTiff(std::string_view bytes) {
   const std::unique_ptr<TIFF, void (*)(TIFF*)> tiff(
       TIFFClientOpen("memory", "rm", &memory, TiffRead, TiffWrite, TiffSeek, TiffClose, TiffSize,
                      TiffMap, TiffUnmap),
-      [](TIFF* t) { if (t != nullptr) TIFFClose(t); });
+      [](TIFF* t) {
+        if (t != nullptr) TIFFClose(t);
+      });
   const auto fail = [](const char* what) {
     Throw(tiff_message.empty() ? std::string(what) : tiff_message);
   };
@@ -275,7 +277,8 @@ cv::Mat DecodeBmp(std::string_view bytes) {
   }
   const size_t row_bytes = ((static_cast<size_t>(width) * bits + 31) / 32) * 4;
   // Division, not multiplication: a header may claim sizes whose product overflows.
-  if (data_offset > bytes.size() || row_bytes > (bytes.size() - data_offset) / static_cast<size_t>(height)) {
+  if (data_offset > bytes.size() ||
+      row_bytes > (bytes.size() - data_offset) / static_cast<size_t>(height)) {
     Throw("BMP pixel data truncated");
   }
   const auto row = [&](int y) {
@@ -318,7 +321,8 @@ cv::Mat DecodeBmp(std::string_view bytes) {
 // ---- Encoding ------------------------------------------------------------------------
 
 void PngWrite(png_structp png, png_bytep data, png_size_t length) {
-  static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), length);
+  static_cast<std::string*>(png_get_io_ptr(png))
+      ->append(reinterpret_cast<const char*>(data), length);
 }
 
 void PngFlush(png_structp) {}
@@ -362,9 +366,9 @@ std::string EncodePng(const cv::Mat& image) {
   const int color_type = image.channels() == 1   ? PNG_COLOR_TYPE_GRAY
                          : image.channels() == 3 ? PNG_COLOR_TYPE_RGB
                                                  : PNG_COLOR_TYPE_RGB_ALPHA;
-  png_set_IHDR(png, info, static_cast<png_uint_32>(image.cols), static_cast<png_uint_32>(image.rows),
-               image.depth() == CV_16U ? 16 : 8, color_type, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image.cols),
+               static_cast<png_uint_32>(image.rows), image.depth() == CV_16U ? 16 : 8, color_type,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   if (image.channels() > 1) png_set_bgr(png);
   if (image.depth() == CV_16U) png_set_swap(png);
@@ -402,7 +406,8 @@ std::string EncodeJpeg(const cv::Mat& image, int quality) {
   jpeg_set_quality(&info, std::clamp(quality, 1, 100), TRUE);
   jpeg_start_compress(&info, TRUE);
   while (info.next_scanline < info.image_height) {
-    JSAMPROW row = const_cast<JSAMPROW>(image.ptr<unsigned char>(static_cast<int>(info.next_scanline)));
+    JSAMPROW row =
+        const_cast<JSAMPROW>(image.ptr<unsigned char>(static_cast<int>(info.next_scanline)));
     jpeg_write_scanlines(&info, &row, 1);
   }
   jpeg_finish_compress(&info);

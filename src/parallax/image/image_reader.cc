@@ -109,7 +109,7 @@ std::optional<ImageSize> WalkJpeg(ByteSource& source, uint64_t* scan_offset) {
     }
     ++offset;
     if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd8)) continue;  // No payload.
-    if (marker == 0xd9) return std::nullopt;  // EOI before any scan.
+    if (marker == 0xd9) return std::nullopt;                             // EOI before any scan.
     if (marker == 0xda) {
       if (size && scan_offset != nullptr) *scan_offset = offset;
       return size;  // Scan data before a frame header: nullopt.
@@ -311,9 +311,9 @@ CheckedHeader CheckHeader(std::string_view bytes, const std::filesystem::path& s
   }
   const int64_t num_pixels = int64_t{size->width} * size->height;
   if (num_pixels > options.max_image_pixels) {
-    Fail(source, "image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
-                     " pixels, more than max_image_pixels = " +
-                     std::to_string(options.max_image_pixels));
+    Fail(source,
+         "image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
+             " pixels, more than max_image_pixels = " + std::to_string(options.max_image_pixels));
   }
   return {format, *size};
 }
@@ -382,8 +382,8 @@ Bitmap DecodeBitmap(std::string_view bytes, const std::filesystem::path& source,
   try {
     decoded = DecodeImage(bytes, format);
   } catch (const std::exception& exception) {
-    Fail(source, std::string("cannot decode ") + FormatName(format) + ": " +
-                     OneLine(exception.what()));
+    Fail(source,
+         std::string("cannot decode ") + FormatName(format) + ": " + OneLine(exception.what()));
   }
   if (decoded.empty()) Fail(source, std::string("cannot decode ") + FormatName(format));
   if (decoded.cols != size.width || decoded.rows != size.height) {

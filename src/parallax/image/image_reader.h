@@ -57,7 +57,7 @@ struct RejectedImageFile {
 // Files of `dir` (not recursive) that look like images by content, sorted by name. Files
 // named like images (.jpg, .jpeg, .png, .tif, .tiff, .bmp, any case) that are not images by
 // content (empty, text) are appended to `rejected` when given, so callers can warn about them.
-std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& dir,
-                                                  std::vector<RejectedImageFile>* rejected = nullptr);
+std::vector<std::filesystem::path> ListImageFiles(
+    const std::filesystem::path& dir, std::vector<RejectedImageFile>* rejected = nullptr);
 
 }  // namespace parallax

@@ -18,7 +18,6 @@ namespace fs = std::filesystem;
 
 class ImageReaderTest : public ::testing::Test {
  protected:
-
   // A colour image with structure in every channel, so channel swaps would show.
   static cv::Mat TestImage(int width, int height, int type = CV_8UC3) {
     cv::Mat image(height, width, type);
@@ -80,11 +79,10 @@ class ImageReaderTest : public ::testing::Test {
 
 TEST_F(ImageReaderTest, DetectsFormatAndSizeOfEachFormat) {
   const cv::Mat image = TestImage(37, 23);
-  const std::vector<std::pair<std::string, ImageFormat>> cases = {
-      {".png", ImageFormat::kPng},
-      {".jpg", ImageFormat::kJpeg},
-      {".bmp", ImageFormat::kBmp},
-      {".tif", ImageFormat::kTiff}};
+  const std::vector<std::pair<std::string, ImageFormat>> cases = {{".png", ImageFormat::kPng},
+                                                                  {".jpg", ImageFormat::kJpeg},
+                                                                  {".bmp", ImageFormat::kBmp},
+                                                                  {".tif", ImageFormat::kTiff}};
   for (const auto& [extension, format] : cases) {
     SCOPED_TRACE(extension);
     const fs::path path = Write("image" + extension, image, extension);

@@ -17,7 +17,8 @@ namespace parallax {
 //   using X_t = ...; using Y_t = ...; using M_t = ...;
 //   static constexpr int kMinNumSamples = ...;
 //   // Every model consistent with the points (minimal or least squares on more); may return none.
-//   void Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y, std::vector<M_t>* models) const;
+//   void Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y, std::vector<M_t>* models)
+//   const;
 //   // Squared residual of every correspondence under `model`.
 //   void Residuals(const std::vector<X_t>& X, const std::vector<Y_t>& Y, const M_t& model,
 //                  std::vector<double>* squared_residuals) const;
@@ -96,7 +97,8 @@ class LoRansac {
 
   explicit LoRansac(const RansacOptions& options, Estimator estimator = {},
                     LocalEstimator local_estimator = {})
-      : options_(options), estimator_(std::move(estimator)),
+      : options_(options),
+        estimator_(std::move(estimator)),
         local_estimator_(std::move(local_estimator)) {
     options_.Check();
   }
@@ -120,9 +122,11 @@ class LoRansac {
     M_t best_model{};
     std::mt19937_64 generator(options_.random_seed);
     size_t max_trials = static_cast<size_t>(options_.max_num_trials);
-    max_trials = std::min(max_trials, ComputeNumRansacTrials(
-        static_cast<size_t>(std::ceil(options_.min_inlier_ratio * num_samples)), num_samples,
-        kSampleSize, options_.confidence, options_.min_inlier_ratio_trials_multiplier));
+    max_trials = std::min(
+        max_trials,
+        ComputeNumRansacTrials(
+            static_cast<size_t>(std::ceil(options_.min_inlier_ratio * num_samples)), num_samples,
+            kSampleSize, options_.confidence, options_.min_inlier_ratio_trials_multiplier));
     max_trials = std::max(max_trials, static_cast<size_t>(options_.min_num_trials));
 
     size_t trial = 0;
@@ -142,9 +146,9 @@ class LoRansac {
         if (options_.local_optimization_iterations > 0) {
           LocalOptimize(X, Y, max_squared_error, &best, &best_model, &residuals);
         }
-        const size_t needed = ComputeNumRansacTrials(best.num_inliers, num_samples, kSampleSize,
-                                                     options_.confidence,
-                                                     options_.dynamic_num_trials_multiplier);
+        const size_t needed =
+            ComputeNumRansacTrials(best.num_inliers, num_samples, kSampleSize, options_.confidence,
+                                   options_.dynamic_num_trials_multiplier);
         max_trials = std::max<size_t>(std::min(max_trials, needed), options_.min_num_trials);
       }
     }

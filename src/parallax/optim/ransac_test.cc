@@ -69,7 +69,8 @@ TEST(LoRansac, RecoversLineWithHalfOutliers) {
 // A line estimator that records the x values of every minimal sample it is given.
 struct RecordingLineEstimator : LineEstimator {
   std::vector<std::vector<double>>* samples = nullptr;
-  void Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y, std::vector<M_t>* models) const {
+  void Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y,
+                std::vector<M_t>* models) const {
     samples->push_back(X);
     LineEstimator::Estimate(X, Y, models);
   }

@@ -296,7 +296,8 @@ TEST_F(CameraSetupTest, CameraJsonGivesFixedOpencvCamera) {
   EXPECT_THROW(CameraAssigner(LoadCameraSetup(with_params), &database), InputError);
   CameraSetupOptions pinhole = options;
   pinhole.camera_model = "PINHOLE";
-  ExpectInputErrorNaming([&] { CameraAssigner(LoadCameraSetup(pinhole), &database); }, "--camera-model");
+  ExpectInputErrorNaming([&] { CameraAssigner(LoadCameraSetup(pinhole), &database); },
+                         "--camera-model");
   CameraSetupOptions missing;
   missing.camera_json_path = dir_ / "missing.json";
   ExpectInputErrorNaming([&] { CameraAssigner(LoadCameraSetup(missing), &database); },

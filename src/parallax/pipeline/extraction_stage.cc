@@ -3,8 +3,8 @@
 #include <chrono>
 #include <memory>
 #include <mutex>
-#include <set>
 #include <opencv2/core.hpp>
+#include <set>
 
 #include "parallax/util/check.h"
 #include "parallax/util/content_hash.h"
@@ -55,7 +55,8 @@ struct ExtractionResult {
 // The EXIF GPS position of a photo, if any.
 std::optional<GeodeticPosition> GpsPosition(const std::optional<ExifData>& exif) {
   if (!exif || !exif->gps_latitude || !exif->gps_longitude) return std::nullopt;
-  return GeodeticPosition{*exif->gps_latitude, *exif->gps_longitude, exif->gps_altitude.value_or(0.0)};
+  return GeodeticPosition{*exif->gps_latitude, *exif->gps_longitude,
+                          exif->gps_altitude.value_or(0.0)};
 }
 
 // Size and modification time of the file as it is now (no digest).
@@ -72,8 +73,7 @@ ImageFileFingerprint StatImageFile(const std::filesystem::path& path) {
 }
 
 // The fingerprint with its digest; adds the time spent to `*hash_seconds`.
-ImageFileFingerprint FingerprintImageFile(const std::filesystem::path& path,
-                                          double* hash_seconds) {
+ImageFileFingerprint FingerprintImageFile(const std::filesystem::path& path, double* hash_seconds) {
   const Timer timer;
   ImageFileFingerprint fingerprint = StatImageFile(path);
   fingerprint.content_hash = HashFile(path);
@@ -126,13 +126,16 @@ void ExtractionStageOptions::Check() const {
 }
 
 ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
-                                         const std::filesystem::path& image_dir, Database* database) {
+                                         const std::filesystem::path& image_dir,
+                                         Database* database) {
   // A setting no image can satisfy would otherwise skip every image with the same warning.
   return RunExtractionStage(options, LoadCameraSetup(options.camera), image_dir, database);
 }
 
-ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options, const CameraSetup& cameras,
-                                         const std::filesystem::path& image_dir, Database* database) {
+ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
+                                         const CameraSetup& cameras,
+                                         const std::filesystem::path& image_dir,
+                                         Database* database) {
   options.Check();
   PARALLAX_CHECK(database != nullptr);
   const Timer timer;
@@ -215,7 +218,8 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options, 
                 ? ImageCameraInfoFromExif(*result.exif, result.width, result.height,
                                           cameras.options.sensor_width_mm)
                 : ImageCameraInfo{};
-        camera_id = camera_assigner.CameraForImage(job.path.string(), result.width, result.height, info);
+        camera_id =
+            camera_assigner.CameraForImage(job.path.string(), result.width, result.height, info);
       } catch (const InputError& error) {
         PARALLAX_LOG(Warning) << "skipping " << error.what();
         stats.failed.emplace_back(job.name, error.what());

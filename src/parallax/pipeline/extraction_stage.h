@@ -5,8 +5,8 @@
 #include <utility>
 #include <vector>
 
-#include "parallax/image/image_reader.h"
 #include "parallax/feature/sift.h"
+#include "parallax/image/image_reader.h"
 #include "parallax/pipeline/camera_setup.h"
 #include "parallax/scene/database.h"
 
@@ -16,9 +16,9 @@ struct ExtractionStageOptions {
   // The paper's detector (3 layers, edge 10, sigma 1.6) with contrast 0.03 instead of its
   // 0.04, for more points and smaller errors (README, "SIFT contrast 0.03").
   SiftExtractionOptions sift{.contrast_threshold = 0.03};
-  ImageReaderOptions reader;   // Decoding limits.
-  CameraSetupOptions camera;   // How cameras are assigned to images (LoadCameraSetup).
-  int num_threads = -1;        // Images extracted in parallel; -1: all cores.
+  ImageReaderOptions reader;  // Decoding limits.
+  CameraSetupOptions camera;  // How cameras are assigned to images (LoadCameraSetup).
+  int num_threads = -1;       // Images extracted in parallel; -1: all cores.
   // Images stored in the database whose file has left the folder (or is no longer an image)
   // are deleted from it with everything computed from them, so that no later stage uses
   // them. Off: they stay (a database shared by several folders).
@@ -46,16 +46,19 @@ struct ExtractionStageResult {
 // database with features are skipped, unless their file changed since (a different size or
 // modification time, then a different XXH3 digest): those, and the pairs they are in, are
 // computed again. After SIGINT or SIGTERM (util/interrupt.h) it stops once the images
-// finished so far are stored, and throws Interrupted. Unreadable files are logged (one warning each) and
-// skipped. Images are processed in parallel and written in name order, so image ids are
+// finished so far are stored, and throws Interrupted. Unreadable files are logged (one warning
+// each) and skipped. Images are processed in parallel and written in name order, so image ids are
 // deterministic. Throws InputError for a missing folder or intrinsics file, or a database
 // that cannot be written.
 
 // Cameras are assigned from `cameras` (LoadCameraSetup of options.camera, which the
 // three-argument form loads itself).
-ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options, const CameraSetup& cameras,
-                                         const std::filesystem::path& image_dir, Database* database);
 ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
-                                       const std::filesystem::path& image_dir, Database* database);
+                                         const CameraSetup& cameras,
+                                         const std::filesystem::path& image_dir,
+                                         Database* database);
+ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
+                                         const std::filesystem::path& image_dir,
+                                         Database* database);
 
 }  // namespace parallax

@@ -120,7 +120,8 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
     const ImageCluster cluster = ReadImageCluster(options.cluster_file);
     input = ClusterMapperInput(input, cluster, options.cluster_file.string());
     PARALLAX_LOG(Info) << "mapper: cluster " << options.cluster_file.string() << ": "
-                       << cluster.image_names.size() << " images, " << cluster.pairs.size() << " pairs";
+                       << cluster.image_names.size() << " images, " << cluster.pairs.size()
+                       << " pairs";
   }
   for (const auto& [image_id, image] : input.images) {
     result.image_names[image_id] = image.name;

@@ -16,7 +16,6 @@ namespace fs = std::filesystem;
 
 class MappingStageTest : public ::testing::Test {
  protected:
-
   // Two registered images of one camera with `num_points` points seen by both, each at the
   // same pixel (x = index) in both images.
   static Reconstruction TwoViewModel(int num_points) {
@@ -49,8 +48,8 @@ class MappingStageTest : public ::testing::Test {
 
 TEST_F(MappingStageTest, ColoursAreTheMeanOfTheObservations) {
   // view1 is (red 10, green 20, blue 30) everywhere, view2 (red 50, green 61, blue 255).
-  ASSERT_TRUE(cv::imwrite((dir_ / "view1.png").string(),
-                          cv::Mat(48, 64, CV_8UC3, cv::Scalar(30, 20, 10))));
+  ASSERT_TRUE(
+      cv::imwrite((dir_ / "view1.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(30, 20, 10))));
   ASSERT_TRUE(cv::imwrite((dir_ / "view2.png").string(),
                           cv::Mat(48, 64, CV_8UC3, cv::Scalar(255, 61, 50))));
   Reconstruction model = TwoViewModel(60);
@@ -76,9 +75,9 @@ TEST_F(MappingStageTest, WriteModelsReplacesTheOutputsOfAnEarlierRunAsAWhole) {
   WriteTextFileAtomically(out / "sparse.tmp-1234" / "0" / "cameras.txt", "partial");
 
   WriteModels({TwoViewModel(5)}, out, true, false);
-  EXPECT_FALSE(fs::exists(out / "sparse" / "1"));        // No model of the earlier run.
+  EXPECT_FALSE(fs::exists(out / "sparse" / "1"));  // No model of the earlier run.
   EXPECT_FALSE(fs::exists(out / "sparse" / "0" / "points3D.bin"));
-  EXPECT_FALSE(fs::exists(out / "summary.json"));        // The caller writes it anew.
+  EXPECT_FALSE(fs::exists(out / "summary.json"));  // The caller writes it anew.
   EXPECT_FALSE(fs::exists(out / "sparse.tmp-1234"));
   EXPECT_EQ(ReadReconstruction(out / "sparse" / "0").NumPoints3D(), 5u);
   EXPECT_TRUE(fs::exists(out / "points.ply"));

@@ -18,7 +18,7 @@ namespace {
 // What matching and verification need of one image, loaded once per batch that uses it.
 struct ImageFeatures {
   MatchableDescriptors descriptors;
-  MatchableDescriptors largest;  // The preemptive test's largest-scale features.
+  MatchableDescriptors largest;         // The preemptive test's largest-scale features.
   std::vector<Eigen::Vector2d> points;  // Keypoints as stored (pixel centres at +0.5).
 };
 
@@ -41,8 +41,9 @@ bool IsVerified(const TwoViewGeometry& geometry) {
 }
 
 // The pairs without a two-view geometry in `database`; counts the others in `*num_stored`.
-std::vector<std::pair<image_t, image_t>> PairsNotStored(const std::vector<std::pair<image_t, image_t>>& pairs,
-                                                        const Database& database, size_t* num_stored) {
+std::vector<std::pair<image_t, image_t>> PairsNotStored(
+    const std::vector<std::pair<image_t, image_t>>& pairs, const Database& database,
+    size_t* num_stored) {
   std::vector<std::pair<image_t, image_t>> remaining;
   for (const auto& pair : pairs) {
     if (database.ExistsTwoViewGeometry(pair.first, pair.second)) {
@@ -55,8 +56,8 @@ std::vector<std::pair<image_t, image_t>> PairsNotStored(const std::vector<std::p
 }
 
 // The rows of the `count` largest-scale keypoints (all when there are fewer).
-MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints, const MatchableDescriptors& descriptors,
-                                     int count) {
+MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
+                                     const MatchableDescriptors& descriptors, int count) {
   std::vector<int> order(keypoints.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   const size_t keep = std::min(order.size(), static_cast<size_t>(count));
@@ -66,7 +67,8 @@ MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints, const Ma
   });
   MatchableDescriptors largest;
   largest.values.resize(static_cast<Eigen::Index>(keep), descriptors.values.cols());
-  for (size_t k = 0; k < keep; ++k) largest.values.row(static_cast<Eigen::Index>(k)) = descriptors.values.row(order[k]);
+  for (size_t k = 0; k < keep; ++k)
+    largest.values.row(static_cast<Eigen::Index>(k)) = descriptors.values.row(order[k]);
   return largest;
 }
 
@@ -87,8 +89,7 @@ void MatchingStageOptions::Check() const {
   PARALLAX_CHECK_GT(batch_size, 0);
 }
 
-MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
-                                    Database* database) {
+MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Database* database) {
   options.Check();
   PARALLAX_CHECK(database != nullptr);
   const Timer timer;
@@ -127,21 +128,25 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
   const std::vector<std::pair<image_t, image_t>> pairs =
       PairsNotStored(all_pairs, *database, &stats.num_skipped);
   std::string mode_names;
-  for (const PairMode mode : selection.modes) mode_names += (mode_names.empty() ? "" : " + ") + PairModeName(mode);
+  for (const PairMode mode : selection.modes)
+    mode_names += (mode_names.empty() ? "" : " + ") + PairModeName(mode);
   PARALLAX_LOG(Info) << "Matching: " << image_ids.size() << " images, " << all_pairs.size() << " "
-                     << mode_names << " pairs (" << selection.reason << "; chosen in " << selection.seconds
-                     << " s), " << stats.num_skipped << " already verified, " << pairs.size() << " to match"
+                     << mode_names << " pairs (" << selection.reason << "; chosen in "
+                     << selection.seconds << " s), " << stats.num_skipped << " already verified, "
+                     << pairs.size() << " to match"
                      << (stats.preemptive ? ", preemptive test on" : "");
 
   // Each pair runs on one thread; the parallelism is over pairs.
   FeatureMatchingOptions matching_options = options.matching;
   matching_options.num_threads = 1;
   FeatureMatchingOptions preemptive_matching_options = matching_options;
-  if (options.preemptive.max_ratio > 0) preemptive_matching_options.max_ratio = options.preemptive.max_ratio;
+  if (options.preemptive.max_ratio > 0)
+    preemptive_matching_options.max_ratio = options.preemptive.max_ratio;
   const size_t cache_capacity = 2 * static_cast<size_t>(options.pairs.block_size);
   std::unordered_map<image_t, ImageFeatures> cache;
   // Matches, verifies and stores `pairs` in batches (one transaction each).
-  const auto match_pairs = [&](const std::vector<std::pair<image_t, image_t>>& pairs, const char* label) {
+  const auto match_pairs = [&](const std::vector<std::pair<image_t, image_t>>& pairs,
+                               const char* label) {
     ProgressReporter progress(label, pairs.size());
 
     for (size_t batch_start = 0; batch_start < pairs.size(); batch_start += options.batch_size) {
@@ -209,7 +214,8 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
         Timer pair_timer;
         if (!job.has_matches && stats.preemptive) {
           job.num_preemptive_matches = static_cast<int>(
-              MatchDescriptors(features1.largest, features2.largest, preemptive_matching_options).size());
+              MatchDescriptors(features1.largest, features2.largest, preemptive_matching_options)
+                  .size());
           job.preemptive_rejected = job.num_preemptive_matches < options.preemptive.min_matches;
         }
         if (!job.has_matches && !job.preemptive_rejected) {
@@ -227,10 +233,10 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
           TwoViewGeometryOptions pair_options = options.geometry;
           pair_options.ransac.random_seed = DeriveSeed(
               options.geometry.ransac.random_seed, ImagePairToPairId(job.image_id1, job.image_id2));
-          job.geometry =
-              EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)), features1.points,
-                                      cameras.at(camera_of_image.at(job.image_id2)), features2.points,
-                                      job.matches, pair_options);
+          job.geometry = EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)),
+                                                 features1.points,
+                                                 cameras.at(camera_of_image.at(job.image_id2)),
+                                                 features2.points, job.matches, pair_options);
         }
         job.verification_seconds = pair_timer.ElapsedSeconds();
         job.done = true;
@@ -271,25 +277,26 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
   match_pairs(pairs, "matching");
 
   // Pairs that close loops: images that verified pairs tie together but retrieval missed.
-  const bool retrieval = std::find(selection.modes.begin(), selection.modes.end(), PairMode::kRetrieval) !=
-                         selection.modes.end();
+  const bool retrieval = std::find(selection.modes.begin(), selection.modes.end(),
+                                   PairMode::kRetrieval) != selection.modes.end();
   for (int round = 0; retrieval && options.pairs.retrieval.num_loop_neighbors > 0 &&
                       round < options.pairs.retrieval.num_loop_rounds;
        ++round) {
     std::vector<std::pair<image_pair_t, int>> verified;
     for (const auto& [pair_id, num_inliers] : database->ReadTwoViewGeometryNumInliers()) {
-      if (num_inliers >= options.geometry.min_num_inliers) verified.emplace_back(pair_id, num_inliers);
+      if (num_inliers >= options.geometry.min_num_inliers)
+        verified.emplace_back(pair_id, num_inliers);
     }
     // Pairs tried and rejected before are not candidates again (nor counted as skipped).
     size_t num_rejected_before = 0;
     std::vector<std::pair<image_t, image_t>> loop_pairs = PairsNotStored(
-        LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors), *database,
-        &num_rejected_before);
+        LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors),
+        *database, &num_rejected_before);
     if (loop_pairs.empty()) break;
     stats.num_pairs += loop_pairs.size();
     stats.selection.num_loop_pairs += loop_pairs.size();
-    PARALLAX_LOG(Info) << "Matching: " << loop_pairs.size() << " pairs that close loops (round " << round + 1
-                       << ": neighbours of verified neighbours) to match";
+    PARALLAX_LOG(Info) << "Matching: " << loop_pairs.size() << " pairs that close loops (round "
+                       << round + 1 << ": neighbours of verified neighbours) to match";
     match_pairs(OrderPairsForLocality(std::move(loop_pairs), image_ids), "matching loops");
   }
 

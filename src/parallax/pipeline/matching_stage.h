@@ -52,14 +52,14 @@ struct PairMatchStats {
 };
 
 struct MatchingStageResult {
-  PairSelection selection;            // How the pairs were chosen (pairs themselves cleared).
-  bool preemptive = false;            // Whether the preemptive test ran.
-  size_t num_pairs = 0;               // Pairs the mode selects ("considered").
-  size_t num_skipped = 0;             // Already verified in the database (resumed run).
-  size_t num_matched = 0;             // Matched (or read back) and verified in this run.
-  size_t num_preemptive_rejected = 0; // Of those, pairs the preemptive test stopped.
-  size_t num_verified = 0;            // Of those, pairs with an accepted geometry.
-  std::vector<PairMatchStats> pairs;  // One per pair processed in this run.
+  PairSelection selection;             // How the pairs were chosen (pairs themselves cleared).
+  bool preemptive = false;             // Whether the preemptive test ran.
+  size_t num_pairs = 0;                // Pairs the mode selects ("considered").
+  size_t num_skipped = 0;              // Already verified in the database (resumed run).
+  size_t num_matched = 0;              // Matched (or read back) and verified in this run.
+  size_t num_preemptive_rejected = 0;  // Of those, pairs the preemptive test stopped.
+  size_t num_verified = 0;             // Of those, pairs with an accepted geometry.
+  std::vector<PairMatchStats> pairs;   // One per pair processed in this run.
   double seconds = 0;
   // Time spent in descriptor matching and in verification, summed over threads.
   double matching_thread_seconds = 0;
@@ -71,7 +71,6 @@ struct MatchingStageResult {
 // two_view_geometries in batches, one transaction each. Pairs that already have a two-view
 // geometry are skipped (resume); pairs with stored matches but no geometry are verified
 // from those matches. Keypoints are used as stored (COLMAP's +0.5 pixel-centre convention).
-MatchingStageResult RunMatchingStage(const MatchingStageOptions& options,
-                                    Database* database);
+MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Database* database);
 
 }  // namespace parallax

@@ -19,7 +19,6 @@ namespace fs = std::filesystem;
 // descriptor, plus `num_clutter` keypoints with random descriptors.
 class FeatureMatchingTest : public ::testing::Test {
  protected:
-
   void MakeScene(Database* database, int num_images, int num_points, int num_clutter) {
     std::vector<Eigen::Vector3d> points(num_points);
     FeatureDescriptors point_descriptors(num_points, 128);
@@ -230,7 +229,8 @@ TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
     for (int k = 0; k < 200; ++k) {
       keypoints.emplace_back(static_cast<float>(RandomUniformReal(0, 640)),
                              static_cast<float>(RandomUniformReal(0, 480)));
-      for (int d = 0; d < 128; ++d) descriptors(k, d) = static_cast<uint8_t>(RandomUniformInteger(0, 255));
+      for (int d = 0; d < 128; ++d)
+        descriptors(k, d) = static_cast<uint8_t>(RandomUniformInteger(0, 255));
     }
     database.WriteImageWithFeatures(name, camera_id, keypoints, descriptors);
   }
@@ -246,7 +246,8 @@ TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
   EXPECT_EQ(stats.num_verified, 6u);
   for (const PairMatchStats& pair : stats.pairs) {
     EXPECT_GE(pair.num_preemptive_matches, 0);
-    EXPECT_EQ(pair.preemptive_rejected, pair.num_preemptive_matches < options.preemptive.min_matches);
+    EXPECT_EQ(pair.preemptive_rejected,
+              pair.num_preemptive_matches < options.preemptive.min_matches);
     if (pair.preemptive_rejected) {
       EXPECT_EQ(pair.num_putative, 0);
       EXPECT_EQ(pair.config, TwoViewGeometry::kDegenerate);

@@ -85,7 +85,8 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   // 6. Evaluation and report.
   const Reconstruction& model = result.mapping.models.front();
   if (!options.ground_truth_path.empty()) {
-    result.evaluation = EvaluateReconstruction(model, ReadGroundTruth(options.ground_truth_path), {});
+    result.evaluation =
+        EvaluateReconstruction(model, ReadGroundTruth(options.ground_truth_path), {});
   }
   if (options.write_report) {
     timer.Restart();
@@ -98,7 +99,8 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
     inputs.evaluation = result.evaluation;
     result.report_path = output_dir / "report.html";
     WriteHtmlReport(inputs, result.report_path);
-    PARALLAX_LOG(Info) << "report: " << result.report_path.string() << " (" << timer.ElapsedSeconds() << " s)";
+    PARALLAX_LOG(Info) << "report: " << result.report_path.string() << " ("
+                       << timer.ElapsedSeconds() << " s)";
   }
   return result;
 }

@@ -5,8 +5,8 @@
 #include <string>
 
 #include "parallax/pipeline/extraction_stage.h"
-#include "parallax/pipeline/matching_stage.h"
 #include "parallax/pipeline/mapping_stage.h"
+#include "parallax/pipeline/matching_stage.h"
 #include "parallax/pipeline/run_summary.h"
 #include "parallax/report/evaluation.h"
 

@@ -77,8 +77,8 @@ class TempleRingTest : public ::testing::Test {
 // ("DIGEST  FILE" lines). The default build computes the same bits on every x86-64-v3 machine
 // (issue 23, docs/portable-build.md), and each rank of an MPI run must; any change that moves
 // a bit of this model updates the file, and says why in its commit.
-const char kTempleRingModelDigests[] = PARALLAX_SOURCE_DIR
-    "/src/parallax/pipeline/testdata/templering_known_k_model.xxh128";
+const char kTempleRingModelDigests[] =
+    PARALLAX_SOURCE_DIR "/src/parallax/pipeline/testdata/templering_known_k_model.xxh128";
 
 // With the ground-truth K: registration and accuracy against the ground truth, and the model's
 // bytes against the checked-in digests.
@@ -90,7 +90,8 @@ TEST_F(TempleRingTest, KnownIntrinsics) {
   // the machine: fix every thread count.
   options.extraction.num_threads = 2;
   options.matching.num_threads = 2;
-  for (BundleAdjustmentOptions* ba : options.mapping.mapper.BundleAdjustments()) ba->num_threads = 2;
+  for (BundleAdjustmentOptions* ba : options.mapping.mapper.BundleAdjustments())
+    ba->num_threads = 2;
   ASSERT_NO_FATAL_FAILURE(Reconstruct(options));
   EXPECT_EQ(model_.NumRegImages(), 47u);
   EXPECT_LE(metrics_.center_error.median, 0.0013);  // Metres.

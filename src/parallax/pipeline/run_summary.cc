@@ -75,7 +75,8 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
     const auto keypoints = result.num_keypoints.find(image_id);
     entry["num_keypoints"] = keypoints == result.num_keypoints.end() ? 0 : keypoints->second;
     const auto it = result.summary.images.find(image_id);
-    const MapperImageReport report = it == result.summary.images.end() ? MapperImageReport() : it->second;
+    const MapperImageReport report =
+        it == result.summary.images.end() ? MapperImageReport() : it->second;
     entry["registered"] = report.model_index >= 0;
     entry["model"] = report.model_index;
     size_t num_observations = 0;
@@ -120,8 +121,10 @@ nlohmann::json MatchingSummary(const MatchingStageResult& stats) {
                             {"seconds", stats.seconds},
                             {"matching_thread_seconds", stats.matching_thread_seconds},
                             {"verification_thread_seconds", stats.verification_thread_seconds}};
-  if (stats.selection.num_retrieval_pairs > 0) summary["retrieval_pairs"] = stats.selection.num_retrieval_pairs;
-  if (stats.selection.num_spatial_pairs > 0) summary["spatial_pairs"] = stats.selection.num_spatial_pairs;
+  if (stats.selection.num_retrieval_pairs > 0)
+    summary["retrieval_pairs"] = stats.selection.num_retrieval_pairs;
+  if (stats.selection.num_spatial_pairs > 0)
+    summary["spatial_pairs"] = stats.selection.num_spatial_pairs;
   if (stats.selection.num_loop_pairs > 0) summary["loop_pairs"] = stats.selection.num_loop_pairs;
   if (!stats.selection.vocab_tree_path.empty()) {
     summary["vocab_tree"] = stats.selection.vocab_tree_path.string();

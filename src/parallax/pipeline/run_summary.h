@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "parallax/pipeline/matching_stage.h"
 #include "parallax/pipeline/mapping_stage.h"
+#include "parallax/pipeline/matching_stage.h"
 
 namespace parallax {
 

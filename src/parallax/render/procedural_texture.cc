@@ -126,7 +126,8 @@ Eigen::Vector3f MarbleAlbedo(const Eigen::Vector2f& p, uint32_t seed, float foot
                  Eigen::Vector3f(0.95f, 0.93f, 0.88f));
 }
 
-Eigen::Vector3f ColumnAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint, float radius) {
+Eigen::Vector3f ColumnAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint,
+                             float radius) {
   constexpr int kFlutes = 20;
   const float flute_period = 2.0f * std::numbers::pi_v<float> * radius / kFlutes;
   const float flute = std::cos(2.0f * std::numbers::pi_v<float> * p.x() / flute_period);
@@ -171,16 +172,20 @@ Eigen::Vector3f AsphaltAlbedo(const Eigen::Vector2f& p, float along, float acros
   color = Speckle(p, seed + 2, footprint, 0.5f, color, Eigen::Vector3f(0.15f, 0.15f, 0.15f),
                   Eigen::Vector3f(0.55f, 0.55f, 0.53f));
   // The centre line: 3 m dashes every 6 m, 15 cm wide.
-  const float dash = SmoothStep(0.0f, 0.2f, 1.5f - std::abs(std::fmod(std::abs(along), 6.0f) - 3.0f));
-  const float width = LodWeight(0.3f, footprint) * (1.0f - SmoothStep(0.06f, 0.09f, std::abs(across)));
+  const float dash =
+      SmoothStep(0.0f, 0.2f, 1.5f - std::abs(std::fmod(std::abs(along), 6.0f) - 3.0f));
+  const float width =
+      LodWeight(0.3f, footprint) * (1.0f - SmoothStep(0.06f, 0.09f, std::abs(across)));
   return Mix(color, Eigen::Vector3f(0.88f, 0.86f, 0.8f), dash * width);
 }
 
-Eigen::Vector3f FieldAlbedo(const Eigen::Vector2f& p, uint32_t crop_seed, uint32_t seed, float footprint) {
+Eigen::Vector3f FieldAlbedo(const Eigen::Vector2f& p, uint32_t crop_seed, uint32_t seed,
+                            float footprint) {
   const float spacing = 0.6f + 0.8f * UnitFloat(Mix32(crop_seed + 11));
   const Eigen::Vector3f soil(0.5f, 0.4f, 0.28f);
-  const Eigen::Vector3f crop = Mix(Eigen::Vector3f(0.35f, 0.5f, 0.2f), Eigen::Vector3f(0.72f, 0.64f, 0.33f),
-                                   UnitFloat(Mix32(crop_seed + 12)));
+  const Eigen::Vector3f crop =
+      Mix(Eigen::Vector3f(0.35f, 0.5f, 0.2f), Eigen::Vector3f(0.72f, 0.64f, 0.33f),
+          UnitFloat(Mix32(crop_seed + 12)));
   // Rows along u: a soft stripe per row, fading to the mean colour when rows are sub-pixel.
   const float row = 0.5f + 0.5f * std::cos(2.0f * std::numbers::pi_v<float> * p.y() / spacing);
   const float lod = LodWeight(spacing, footprint);

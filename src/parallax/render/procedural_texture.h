@@ -22,7 +22,8 @@ inline uint32_t Mix32(uint32_t h) {
 }
 
 inline uint32_t HashCell(int32_t x, int32_t y, uint32_t seed) {
-  return Mix32(static_cast<uint32_t>(x) * 0x8DA6B343u + Mix32(static_cast<uint32_t>(y) * 0xD8163841u + seed));
+  return Mix32(static_cast<uint32_t>(x) * 0x8DA6B343u +
+               Mix32(static_cast<uint32_t>(y) * 0xD8163841u + seed));
 }
 
 // A hash mapped to [0, 1).
@@ -47,7 +48,8 @@ inline float ValueNoise(float x, float y, uint32_t seed) {
   tx = tx * tx * (3.0f - 2.0f * tx);
   ty = ty * ty * (3.0f - 2.0f * ty);
   const float a = UnitFloat(HashCell(ix, iy, seed)), b = UnitFloat(HashCell(ix + 1, iy, seed));
-  const float c = UnitFloat(HashCell(ix, iy + 1, seed)), d = UnitFloat(HashCell(ix + 1, iy + 1, seed));
+  const float c = UnitFloat(HashCell(ix, iy + 1, seed)),
+              d = UnitFloat(HashCell(ix + 1, iy + 1, seed));
   const float top = a + (b - a) * tx, bottom = c + (d - c) * tx;
   return top + (bottom - top) * ty;
 }
@@ -74,7 +76,8 @@ Eigen::Vector3f EarthAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footp
 Eigen::Vector3f PavingAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint);
 Eigen::Vector3f MarbleAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint);
 // p = (arc length around the column, height).
-Eigen::Vector3f ColumnAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint, float radius);
+Eigen::Vector3f ColumnAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint,
+                             float radius);
 Eigen::Vector3f AshlarAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint);
 Eigen::Vector3f RoofTileAlbedo(const Eigen::Vector2f& p, uint32_t seed, float footprint);
 // Albedos of the town seen from the air. Asphalt textured at `p`, with a dashed centre line
@@ -83,6 +86,7 @@ Eigen::Vector3f AsphaltAlbedo(const Eigen::Vector2f& p, float along, float acros
                               float footprint);
 // A ploughed or planted field: rows along u, their spacing and colour from `crop_seed`, the
 // soil's detail from `seed`.
-Eigen::Vector3f FieldAlbedo(const Eigen::Vector2f& p, uint32_t crop_seed, uint32_t seed, float footprint);
+Eigen::Vector3f FieldAlbedo(const Eigen::Vector2f& p, uint32_t crop_seed, uint32_t seed,
+                            float footprint);
 
 }  // namespace parallax

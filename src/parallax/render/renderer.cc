@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <vector>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "parallax/util/check.h"
 #include "parallax/util/threading.h"
@@ -15,7 +15,8 @@ namespace {
 // Radiance along one ray. `sample_angle` is the angle between neighbouring samples, which
 // sets the texture footprint.
 Eigen::Vector3f Trace(const SceneModel& scene, const Eigen::Vector3d& origin,
-                      const Eigen::Vector3d& direction, double sample_angle, const RenderOptions& options) {
+                      const Eigen::Vector3d& direction, double sample_angle,
+                      const RenderOptions& options) {
   SurfaceHit hit;
   if (!scene.Intersect(origin, direction, std::numeric_limits<double>::infinity(), &hit)) {
     return SceneModel::SkyColor(direction);
@@ -37,7 +38,8 @@ Eigen::Vector3f Trace(const SceneModel& scene, const Eigen::Vector3d& origin,
 }  // namespace
 
 void RenderOptions::Check() const {
-  PARALLAX_CHECK_MSG(std::abs(sun_direction.norm() - 1.0) < 1e-6, "sun_direction must be a unit vector");
+  PARALLAX_CHECK_MSG(std::abs(sun_direction.norm() - 1.0) < 1e-6,
+                     "sun_direction must be a unit vector");
   PARALLAX_CHECK_GE(sun_intensity, 0.0);
   PARALLAX_CHECK_GE(ambient_intensity, 0.0);
   PARALLAX_CHECK_GT(exposure, 0.0);
@@ -60,16 +62,17 @@ cv::Mat RenderView(const SceneModel& scene, const Camera& camera, const Rigid3d&
   const Eigen::Vector3d origin = ProjectionCenter(cam_from_world);
   // Angle between neighbouring rays: textures average out detail finer than that.
   const double pixel_angle = 1.0 / std::sqrt(fx * fy);
-  const double sample_angle = options.antialiasing == Antialiasing::kQuincunx
-                                  ? pixel_angle / std::sqrt(2.0)
-                                  : (options.antialiasing == Antialiasing::kGrid3x3 ? pixel_angle / 3.0
-                                                                                     : pixel_angle);
+  const double sample_angle =
+      options.antialiasing == Antialiasing::kQuincunx
+          ? pixel_angle / std::sqrt(2.0)
+          : (options.antialiasing == Antialiasing::kGrid3x3 ? pixel_angle / 3.0 : pixel_angle);
   const auto ray_in_cam = [&](double x, double y) -> Eigen::Vector3d {
     if (pinhole) return Eigen::Vector3d((x - cx) / fx, (y - cy) / fy, 1.0);
     return camera.CamFromImg(Eigen::Vector2d(x, y)).homogeneous();
   };
   const auto sample = [&](double x, double y) -> Eigen::Vector3f {
-    return Trace(scene, origin, (world_from_cam * ray_in_cam(x, y)).normalized(), sample_angle, options);
+    return Trace(scene, origin, (world_from_cam * ray_in_cam(x, y)).normalized(), sample_angle,
+                 options);
   };
 
   // Quincunx: the (width + 1) x (height + 1) pixel corners first, shared by neighbours.
@@ -89,16 +92,20 @@ cv::Mat RenderView(const SceneModel& scene, const Camera& camera, const Rigid3d&
     for (int col = 0; col < width; ++col) {
       Eigen::Vector3f color = Eigen::Vector3f::Zero();
       switch (options.antialiasing) {
-        case Antialiasing::kNone: color = sample(col + 0.5, row + 0.5); break;
+        case Antialiasing::kNone:
+          color = sample(col + 0.5, row + 0.5);
+          break;
         case Antialiasing::kQuincunx: {
           const Eigen::Vector3f* top = &corners[row * (width + 1) + col];
           const Eigen::Vector3f* bottom = top + (width + 1);
-          color = 0.5f * sample(col + 0.5, row + 0.5) + 0.125f * (top[0] + top[1] + bottom[0] + bottom[1]);
+          color = 0.5f * sample(col + 0.5, row + 0.5) +
+                  0.125f * (top[0] + top[1] + bottom[0] + bottom[1]);
           break;
         }
         case Antialiasing::kGrid3x3:
           for (int sy = 0; sy < 3; ++sy) {
-            for (int sx = 0; sx < 3; ++sx) color += sample(col + (sx + 0.5) / 3.0, row + (sy + 0.5) / 3.0);
+            for (int sx = 0; sx < 3; ++sx)
+              color += sample(col + (sx + 0.5) / 3.0, row + (sy + 0.5) / 3.0);
           }
           color /= 9.0f;
           break;
@@ -117,7 +124,8 @@ cv::Mat RenderView(const SceneModel& scene, const Camera& camera, const Rigid3d&
   });
 
   if (options.blur_sigma > 0.0) {
-    cv::GaussianBlur(image, image, cv::Size(), options.blur_sigma, options.blur_sigma, cv::BORDER_REFLECT);
+    cv::GaussianBlur(image, image, cv::Size(), options.blur_sigma, options.blur_sigma,
+                     cv::BORDER_REFLECT);
   }
   image *= options.exposure;
   if (options.noise_stddev > 0.0) {

@@ -12,10 +12,10 @@ namespace parallax {
 
 // How many rays make a pixel.
 enum class Antialiasing {
-  kNone,       // one ray through the pixel's centre
-  kQuincunx,   // the centre (weight 1/2) and the 4 corners (1/8 each), corners shared with
-               // the neighbours: about 2 rays per pixel
-  kGrid3x3,    // a 3x3 grid, equal weights: 9 rays per pixel
+  kNone,      // one ray through the pixel's centre
+  kQuincunx,  // the centre (weight 1/2) and the 4 corners (1/8 each), corners shared with
+              // the neighbours: about 2 rays per pixel
+  kGrid3x3,   // a 3x3 grid, equal weights: 9 rays per pixel
 };
 
 struct RenderOptions {

@@ -56,7 +56,8 @@ TEST(RenderView, KnownPointsLandWhereTheyProject) {
   options.antialiasing = Antialiasing::kNone;
   Camera distorted = Camera::Create(1, CameraModelId::kSimpleRadial, 300, 320, 240);
   distorted.params[3] = -0.08;
-  for (const Camera& camera : {Camera::Create(1, CameraModelId::kPinhole, 300, 320, 240), distorted}) {
+  for (const Camera& camera :
+       {Camera::Create(1, CameraModelId::kPinhole, 300, 320, 240), distorted}) {
     // From the -y side and above: points of the roof's near slope (ridge at y = 0, z = 7.4,
     // eaves at y = -3.7, z = 5.6) and of the ground between the camera and the plaza, where
     // nothing can hide them.
@@ -65,14 +66,16 @@ TEST(RenderView, KnownPointsLandWhereTheyProject) {
     RenderView(scene, camera, cam_from_world, options, &depth);
     std::vector<Eigen::Vector3d> points;
     for (double x = -5; x <= 5; x += 1.0) {
-      for (const double y : {-0.9, -1.85, -2.8}) points.emplace_back(x, y, 5.6 + 1.8 * (3.7 + y) / 3.7);
+      for (const double y : {-0.9, -1.85, -2.8})
+        points.emplace_back(x, y, 5.6 + 1.8 * (3.7 + y) / 3.7);
       points.emplace_back(x, -12, 0.0);
     }
     int num_checked = 0;
     for (const Eigen::Vector3d& point : points) {
       const Eigen::Vector3d point_in_cam = cam_from_world * point;
       const Eigen::Vector2d xy = camera.ImgFromCam(point_in_cam);
-      const int col = static_cast<int>(std::floor(xy.x())), row = static_cast<int>(std::floor(xy.y()));
+      const int col = static_cast<int>(std::floor(xy.x())),
+                row = static_cast<int>(std::floor(xy.y()));
       if (col < 0 || row < 0 || col >= depth.cols || row >= depth.rows) continue;
       // Half a pixel of offset changes the depth by well under 1% on these surfaces.
       EXPECT_NEAR(depth.at<float>(row, col), point_in_cam.z(), 0.01 * point_in_cam.z())
@@ -143,15 +146,19 @@ TEST(RenderView, RichTextureEverywhere) {
   // Keypoints in most cells of a 4x4 grid (the sky takes part of the top row).
   std::vector<int> cells(16, 0);
   for (const cv::KeyPoint& keypoint : keypoints) {
-    ++cells[4 * std::min(3, static_cast<int>(keypoint.pt.y / 120)) + std::min(3, static_cast<int>(keypoint.pt.x / 160))];
+    ++cells[4 * std::min(3, static_cast<int>(keypoint.pt.y / 120)) +
+            std::min(3, static_cast<int>(keypoint.pt.x / 160))];
   }
   EXPECT_GE(std::count_if(cells.begin(), cells.end(), [](int count) { return count >= 20; }), 12);
   // At several scales: SIFT octaves 0 to 2 (sigma about 1.6 to 13 pixels).
   int small = 0, medium = 0, large = 0;
   for (const cv::KeyPoint& keypoint : keypoints) {
-    if (keypoint.size < 6) ++small;
-    else if (keypoint.size < 12) ++medium;
-    else ++large;
+    if (keypoint.size < 6)
+      ++small;
+    else if (keypoint.size < 12)
+      ++medium;
+    else
+      ++large;
   }
   EXPECT_GT(small, 300);
   EXPECT_GT(medium, 150);

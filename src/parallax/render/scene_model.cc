@@ -18,7 +18,8 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // Temple dimensions in metres (centre at ground level). Three steps of the base: half sizes
 // in x and y, top height.
-constexpr std::array<std::array<double, 3>, 3> kSteps = {{{6.4, 4.4, 0.3}, {6.0, 4.0, 0.6}, {5.6, 3.6, 0.9}}};
+constexpr std::array<std::array<double, 3>, 3> kSteps = {
+    {{6.4, 4.4, 0.3}, {6.0, 4.0, 0.6}, {5.6, 3.6, 0.9}}};
 constexpr double kFloor = 0.9;
 constexpr double kColumnRadius = 0.33;
 constexpr double kPlinthTop = 1.1;
@@ -114,7 +115,8 @@ std::vector<SurfacePoint> SceneModel::SampleSurfacePoints(double spacing,
       }
       case Shape::kCylinder: {
         const double height = primitive.box.sizes().z();
-        const int n = std::max(3, static_cast<int>(std::ceil(2 * std::numbers::pi * primitive.radius / spacing)));
+        const int n = std::max(
+            3, static_cast<int>(std::ceil(2 * std::numbers::pi * primitive.radius / spacing)));
         const int m = std::max(1, static_cast<int>(std::ceil(height / spacing)));
         for (int i = 0; i < n; ++i) {
           for (int j = 0; j < m; ++j) {
@@ -164,14 +166,14 @@ void SceneModel::AddTemple(int temple_idx) {
   }
   for (const Eigen::Vector2d& xy : columns) {
     const Eigen::Vector3d base = c + Eigen::Vector3d(xy.x(), xy.y(), 0.0);
-    AddBox(base + Eigen::Vector3d(-0.45, -0.45, kFloor), base + Eigen::Vector3d(0.45, 0.45, kPlinthTop),
-           Material::kStone);
+    AddBox(base + Eigen::Vector3d(-0.45, -0.45, kFloor),
+           base + Eigen::Vector3d(0.45, 0.45, kPlinthTop), Material::kStone);
     AddCylinder(base.head<2>(), kColumnRadius, kPlinthTop, kCapitalBottom, Material::kColumn);
     AddBox(base + Eigen::Vector3d(-0.48, -0.48, kCapitalBottom),
            base + Eigen::Vector3d(0.48, 0.48, kArchitraveBottom), Material::kStone);
   }
-  AddBox(c + Eigen::Vector3d(-5.5, -3.5, kArchitraveBottom), c + Eigen::Vector3d(5.5, 3.5, kArchitraveTop),
-         Material::kStone);
+  AddBox(c + Eigen::Vector3d(-5.5, -3.5, kArchitraveBottom),
+         c + Eigen::Vector3d(5.5, 3.5, kArchitraveTop), Material::kStone);
   // Gabled roof: two slopes with a ridge along x, and a pediment at each end.
   const double ridge = kTempleHeight, eave_y = 3.7, eave_x = 5.7;
   for (const double side : {-1.0, 1.0}) {
@@ -182,8 +184,9 @@ void SceneModel::AddTemple(int temple_idx) {
     AddTriangle(a, b, r2, Eigen::Vector3d::UnitX(), Material::kRoof);
     AddTriangle(a, r2, r1, Eigen::Vector3d::UnitX(), Material::kRoof);
     const double x = side * 5.5;
-    AddTriangle(c + Eigen::Vector3d(x, -3.5, kArchitraveTop), c + Eigen::Vector3d(x, 3.5, kArchitraveTop),
-                c + Eigen::Vector3d(x, 0.0, ridge - 0.12), Eigen::Vector3d::UnitY(), Material::kStone);
+    AddTriangle(
+        c + Eigen::Vector3d(x, -3.5, kArchitraveTop), c + Eigen::Vector3d(x, 3.5, kArchitraveTop),
+        c + Eigen::Vector3d(x, 0.0, ridge - 0.12), Eigen::Vector3d::UnitY(), Material::kStone);
   }
   // A few blocks (altars, pedestals, a stele) on the plaza, placed from the seed.
   uint32_t h = Mix32(next_texture_seed_ ^ (0x51ED27u * (temple_idx + 1)));
@@ -195,7 +198,8 @@ void SceneModel::AddTemple(int temple_idx) {
     const double half_x = 0.3 + 0.6 * UnitFloat(h = Mix32(h));
     const double half_y = 0.3 + 0.6 * UnitFloat(h = Mix32(h));
     const double height = 0.5 + 2.0 * UnitFloat(h = Mix32(h));
-    AddBox(center + Eigen::Vector3d(-half_x, -half_y, 0.0), center + Eigen::Vector3d(half_x, half_y, height),
+    AddBox(center + Eigen::Vector3d(-half_x, -half_y, 0.0),
+           center + Eigen::Vector3d(half_x, half_y, height),
            i % 2 == 0 ? Material::kStone : Material::kWall);
   }
 }
@@ -211,7 +215,8 @@ void SceneModel::AddTown() {
   for (int by = -num_blocks; by < num_blocks; ++by) {
     for (int bx = -num_blocks; bx < num_blocks; ++bx) {
       if (IsFieldBlock(bx, by)) continue;
-      const Eigen::Vector2d block_min(bx * kBlockPitch + kStreetWidth, by * kBlockPitch + kStreetWidth);
+      const Eigen::Vector2d block_min(bx * kBlockPitch + kStreetWidth,
+                                      by * kBlockPitch + kStreetWidth);
       const double lot_size = 0.5 * (kBlockPitch - kStreetWidth);
       for (int lot = 0; lot < 4; ++lot) {
         uint32_t h = HashCell(2 * bx + lot % 2, 2 * by + lot / 2, layout_seed_ ^ 0xB0115u);
@@ -235,11 +240,15 @@ void SceneModel::AddTown() {
         // tiles of every roof line up the same way, their weathering is the house's own.
         const uint32_t texture = Mix32(roof_seed + Mix32(h + 4));
         const double ridge_height = wall_height + 0.35 * std::min(size_x, size_y);
-        const Eigen::Vector3d along = size_x >= size_y ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-        const Eigen::Vector3d across = size_x >= size_y ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
-        const double length = size_x >= size_y ? size_x : size_y, width = size_x >= size_y ? size_y : size_x;
+        const Eigen::Vector3d along =
+            size_x >= size_y ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+        const Eigen::Vector3d across =
+            size_x >= size_y ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
+        const double length = size_x >= size_y ? size_x : size_y,
+                     width = size_x >= size_y ? size_y : size_x;
         const Eigen::Vector3d eave0(low.x(), low.y(), wall_height);
-        const Eigen::Vector3d ridge0 = eave0 + 0.5 * width * across + (ridge_height - wall_height) * Eigen::Vector3d::UnitZ();
+        const Eigen::Vector3d ridge0 =
+            eave0 + 0.5 * width * across + (ridge_height - wall_height) * Eigen::Vector3d::UnitZ();
         for (const double side : {0.0, 1.0}) {
           const Eigen::Vector3d a = eave0 + side * width * across;
           const Eigen::Vector3d b = a + length * along;
@@ -247,7 +256,8 @@ void SceneModel::AddTown() {
           AddTriangle(a, ridge0 + length * along, ridge0, along, Material::kRoof, a, texture);
           // The gable ends.
           const Eigen::Vector3d end = eave0 + side * length * along;
-          AddTriangle(end, end + width * across, ridge0 + side * length * along, across, Material::kWall);
+          AddTriangle(end, end + width * across, ridge0 + side * length * along, across,
+                      Material::kWall);
         }
       }
     }
@@ -256,12 +266,15 @@ void SceneModel::AddTown() {
 
 Eigen::Vector3f SceneModel::TownGroundAlbedo(const SurfaceHit& hit, float footprint) const {
   const double x = hit.point.x(), y = hit.point.y();
-  const int bx = static_cast<int>(std::floor(x / kBlockPitch)), by = static_cast<int>(std::floor(y / kBlockPitch));
-  const Eigen::Vector2f local(static_cast<float>(x - bx * kBlockPitch), static_cast<float>(y - by * kBlockPitch));
+  const int bx = static_cast<int>(std::floor(x / kBlockPitch)),
+            by = static_cast<int>(std::floor(y / kBlockPitch));
+  const Eigen::Vector2f local(static_cast<float>(x - bx * kBlockPitch),
+                              static_cast<float>(y - by * kBlockPitch));
   if (local.x() < kStreetWidth || local.y() < kStreetWidth) {
     // Streets along x where local y is small, along y otherwise; v is across the street.
     const float half = 0.5f * static_cast<float>(kStreetWidth);
-    const bool along_x = local.y() < kStreetWidth && (local.x() >= kStreetWidth || local.y() < local.x());
+    const bool along_x =
+        local.y() < kStreetWidth && (local.x() >= kStreetWidth || local.y() < local.x());
     // Texture in world coordinates: no two streets alike but for their markings.
     return along_x ? AsphaltAlbedo(hit.uv.cast<float>(), static_cast<float>(x), local.y() - half,
                                    hit.texture_seed, footprint)
@@ -274,7 +287,8 @@ Eigen::Vector3f SceneModel::TownGroundAlbedo(const SurfaceHit& hit, float footpr
     // y); the soil's detail is the block's own, as no two real fields are pixel copies.
     const uint32_t crop = Mix32(hit.texture_seed + block % kNumRepeatedTextures);
     const Eigen::Vector2f uv = (crop & 1) ? local : Eigen::Vector2f(local.y(), local.x());
-    const float tone = 0.9f + 0.2f * Fbm(hit.uv.cast<float>(), hit.texture_seed + 5, 90.0f, 2, footprint);
+    const float tone =
+        0.9f + 0.2f * Fbm(hit.uv.cast<float>(), hit.texture_seed + 5, 90.0f, 2, footprint);
     return tone * FieldAlbedo(uv, crop, Mix32(block), footprint);
   }
   return EarthAlbedo(hit.uv.cast<float>(), hit.texture_seed, footprint);
@@ -289,22 +303,24 @@ void SceneModel::AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, 
   primitives_.push_back(primitive);
 }
 
-void SceneModel::AddCylinder(const Eigen::Vector2d& center, double radius, double z_min, double z_max,
-                             Material material) {
+void SceneModel::AddCylinder(const Eigen::Vector2d& center, double radius, double z_min,
+                             double z_max, Material material) {
   Primitive primitive;
   primitive.shape = Shape::kCylinder;
   primitive.material = material;
   primitive.texture_seed = Mix32(next_texture_seed_++);
   primitive.center = center;
   primitive.radius = radius;
-  primitive.box = Eigen::AlignedBox3d(Eigen::Vector3d(center.x() - radius, center.y() - radius, z_min),
-                                      Eigen::Vector3d(center.x() + radius, center.y() + radius, z_max));
+  primitive.box =
+      Eigen::AlignedBox3d(Eigen::Vector3d(center.x() - radius, center.y() - radius, z_min),
+                          Eigen::Vector3d(center.x() + radius, center.y() + radius, z_max));
   primitives_.push_back(primitive);
 }
 
-void SceneModel::AddTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                             const Eigen::Vector3d& u_direction, Material material,
-                             const Eigen::Vector3d& uv_origin, std::optional<uint32_t> texture_seed) {
+void SceneModel::AddTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& c, const Eigen::Vector3d& u_direction,
+                             Material material, const Eigen::Vector3d& uv_origin,
+                             std::optional<uint32_t> texture_seed) {
   Primitive primitive;
   primitive.shape = Shape::kTriangle;
   primitive.material = material;
@@ -348,7 +364,8 @@ int SceneModel::BuildNode(int first, int count) {
   centers.sizes().maxCoeff(&axis);
   const int half = count / 2;
   std::nth_element(primitives_.begin() + first, primitives_.begin() + first + half,
-                   primitives_.begin() + first + count, [axis](const Primitive& a, const Primitive& b) {
+                   primitives_.begin() + first + count,
+                   [axis](const Primitive& a, const Primitive& b) {
                      return a.box.center()[axis] < b.box.center()[axis];
                    });
   const int left = BuildNode(first, half);
@@ -382,7 +399,8 @@ bool SceneModel::IntersectPrimitive(const Primitive& primitive, const Eigen::Vec
       normal[axis] = direction[axis] > 0 ? -1.0 : 1.0;
       const Eigen::Vector3d point = origin + t * direction;
       uv = axis == 0 ? Eigen::Vector2d(point.y(), point.z())
-                     : (axis == 1 ? Eigen::Vector2d(point.x(), point.z()) : Eigen::Vector2d(point.x(), point.y()));
+                     : (axis == 1 ? Eigen::Vector2d(point.x(), point.z())
+                                  : Eigen::Vector2d(point.x(), point.y()));
       texture_seed = Mix32(texture_seed + 2 * axis + (normal[axis] > 0 ? 1 : 0));
       break;
     }
@@ -419,7 +437,8 @@ bool SceneModel::IntersectPrimitive(const Primitive& primitive, const Eigen::Vec
       t = primitive.edge2.dot(q) * inv_determinant;
       if (t <= kEpsilon || t >= max_distance) return false;
       if (hit == nullptr) return true;
-      normal = primitive.normal.dot(direction) < 0 ? primitive.normal : Eigen::Vector3d(-primitive.normal);
+      normal = primitive.normal.dot(direction) < 0 ? primitive.normal
+                                                   : Eigen::Vector3d(-primitive.normal);
       const Eigen::Vector3d point = origin + t * direction;
       const Eigen::Vector3d from_origin = point - primitive.uv_origin;
       uv = Eigen::Vector2d(from_origin.dot(primitive.axis_u), from_origin.dot(primitive.axis_v));
@@ -489,7 +508,8 @@ bool SceneModel::Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d&
     const double t = -origin.z() / direction.z();
     const Eigen::Vector3d point = origin + t * direction;
     const Eigen::Vector2d from_middle =
-        point.head<2>() - 0.5 * (TempleCenter(0) + TempleCenter(options_.num_temples - 1)).head<2>();
+        point.head<2>() -
+        0.5 * (TempleCenter(0) + TempleCenter(options_.num_temples - 1)).head<2>();
     if (t < best && from_middle.norm() < ground_radius_) {
       best = t;
       found = true;
@@ -524,16 +544,21 @@ Eigen::Vector3f SceneModel::Albedo(const SurfaceHit& hit, double footprint) cons
     case Material::kGround: {
       if (options_.kind == SceneModelOptions::Kind::kTown) return TownGroundAlbedo(hit, fp);
       // Paved plaza around the nearest temple, earth and grass elsewhere.
-      const int nearest = std::clamp(
-          static_cast<int>(std::lround(hit.point.x() / options_.temple_spacing)), 0, options_.num_temples - 1);
+      const int nearest =
+          std::clamp(static_cast<int>(std::lround(hit.point.x() / options_.temple_spacing)), 0,
+                     options_.num_temples - 1);
       const Eigen::Vector3d local = hit.point - TempleCenter(nearest);
       const bool paved = std::abs(local.x()) < kPlazaHalfX && std::abs(local.y()) < kPlazaHalfY;
       return paved ? PavingAlbedo(p, hit.texture_seed, fp) : EarthAlbedo(p, hit.texture_seed, fp);
     }
-    case Material::kStone: return MarbleAlbedo(p, hit.texture_seed, fp);
-    case Material::kColumn: return ColumnAlbedo(p, hit.texture_seed, fp, static_cast<float>(kColumnRadius));
-    case Material::kWall: return AshlarAlbedo(p, hit.texture_seed, fp);
-    case Material::kRoof: return RoofTileAlbedo(p, hit.texture_seed, fp);
+    case Material::kStone:
+      return MarbleAlbedo(p, hit.texture_seed, fp);
+    case Material::kColumn:
+      return ColumnAlbedo(p, hit.texture_seed, fp, static_cast<float>(kColumnRadius));
+    case Material::kWall:
+      return AshlarAlbedo(p, hit.texture_seed, fp);
+    case Material::kRoof:
+      return RoofTileAlbedo(p, hit.texture_seed, fp);
   }
   return Eigen::Vector3f::Constant(0.5f);
 }

@@ -84,8 +84,9 @@ class SceneModel {
   // Points about `spacing` metres apart on every surface: a jittered grid on the ground
   // inside `ground_region` (x, y), and on each primitive's faces but the bottom ones. The
   // ground truth of which views see the same part of the scene. Deterministic for a seed.
-  std::vector<SurfacePoint> SampleSurfacePoints(double spacing, const Eigen::AlignedBox2d& ground_region,
-                                                   uint64_t seed) const;
+  std::vector<SurfacePoint> SampleSurfacePoints(double spacing,
+                                                const Eigen::AlignedBox2d& ground_region,
+                                                uint64_t seed) const;
 
   const SceneModelOptions& Options() const { return options_; }
   // Centre of temple k at ground level.

@@ -18,7 +18,8 @@ TEST(SceneModel, RaysHitTheKnownSurfaces) {
   EXPECT_NEAR(hit.distance, 20 - SceneModel::kTempleHeight, 1e-9);
   EXPECT_EQ(hit.material, Material::kRoof);
   // Onto a roof slope: the ridge (y = 0, z = 7.4) falls to the eaves (y = -3.7, z = 5.6).
-  ASSERT_TRUE(scene.Intersect(Eigen::Vector3d(1.0, -1.85, 20), -Eigen::Vector3d::UnitZ(), 1e9, &hit));
+  ASSERT_TRUE(
+      scene.Intersect(Eigen::Vector3d(1.0, -1.85, 20), -Eigen::Vector3d::UnitZ(), 1e9, &hit));
   EXPECT_NEAR(hit.point.z(), 6.5, 1e-9);
   EXPECT_NEAR(hit.normal.normalized().dot(Eigen::Vector3d(0, -1.8, 3.7).normalized()), 1.0, 1e-9);
   // Horizontally along the axis, between the columns of the short side, onto the cella wall.
@@ -27,7 +28,8 @@ TEST(SceneModel, RaysHitTheKnownSurfaces) {
   EXPECT_EQ(hit.material, Material::kWall);
   EXPECT_NEAR(hit.normal.x(), -1.0, 1e-12);
   // A column of the long side: axis at (-4.75, -3.0), radius 0.33.
-  ASSERT_TRUE(scene.Intersect(Eigen::Vector3d(-4.75, -30, 3.0), Eigen::Vector3d::UnitY(), 1e9, &hit));
+  ASSERT_TRUE(
+      scene.Intersect(Eigen::Vector3d(-4.75, -30, 3.0), Eigen::Vector3d::UnitY(), 1e9, &hit));
   EXPECT_EQ(hit.material, Material::kColumn);
   EXPECT_NEAR(hit.point.y(), -3.33, 1e-9);
   // The ground away from the temple, and the sky.
@@ -58,8 +60,8 @@ TEST(SceneModel, RowOfTemples) {
   EXPECT_GT(row.Bounds().sizes().x(), 3 * options.temple_spacing + 12);
   SurfaceHit hit;
   for (int k = 0; k < options.num_temples; ++k) {
-    ASSERT_TRUE(row.Intersect(row.TempleCenter(k) + Eigen::Vector3d(0, 0, 20), -Eigen::Vector3d::UnitZ(),
-                              1e9, &hit));
+    ASSERT_TRUE(row.Intersect(row.TempleCenter(k) + Eigen::Vector3d(0, 0, 20),
+                              -Eigen::Vector3d::UnitZ(), 1e9, &hit));
     EXPECT_EQ(hit.material, Material::kRoof);
   }
   options.num_temples = 0;

@@ -57,13 +57,15 @@ struct SurveyPlan {
     const double focal_length = options.EffectiveFocalLength();
     strip_spacing = (1.0 - kSideOverlap) * altitude * options.width / focal_length;
     view_spacing = (1.0 - kForwardOverlap) * altitude * options.height / focal_length;
-    num_strips = std::max(1, static_cast<int>(std::lround(
-                                 std::sqrt(options.num_views * view_spacing / strip_spacing))));
+    num_strips = std::max(
+        1,
+        static_cast<int>(std::lround(std::sqrt(options.num_views * view_spacing / strip_spacing))));
     views_per_strip = (options.num_views + num_strips - 1) / num_strips;
     num_strips = (options.num_views + views_per_strip - 1) / views_per_strip;
   }
   Eigen::Vector2d HalfExtent() const {
-    return 0.5 * Eigen::Vector2d((num_strips - 1) * strip_spacing, (views_per_strip - 1) * view_spacing);
+    return 0.5 *
+           Eigen::Vector2d((num_strips - 1) * strip_spacing, (views_per_strip - 1) * view_spacing);
   }
 };
 
@@ -82,7 +84,8 @@ std::vector<Rigid3d> AerialSurveyPoses(const SyntheticSceneOptions& options, dou
     const int strip = i / plan.views_per_strip, step = i % plan.views_per_strip;
     // Back and forth: odd strips fly south, so their images are upside down to even ones.
     const bool northwards = strip % 2 == 0;
-    const double y = (northwards ? step : plan.views_per_strip - 1 - step) * plan.view_spacing - half.y();
+    const double y =
+        (northwards ? step : plan.views_per_strip - 1 - step) * plan.view_spacing - half.y();
     const Eigen::Vector3d center(strip * plan.strip_spacing - half.x() + jitter(0.7),
                                  y + jitter(0.7), kSurveyAltitude * zoom + jitter(1.0));
     const double heading = (northwards ? 90.0 : -90.0) + jitter(3.0);
@@ -94,7 +97,10 @@ std::vector<Rigid3d> AerialSurveyPoses(const SyntheticSceneOptions& options, dou
       // Tilted towards one of the four directions relative to the flight.
       const int side = static_cast<int>(4 * unit(*engine)) % 4;
       const Eigen::Vector3d left(-flight.y(), flight.x(), 0.0);
-      const Eigen::Vector3d toward = side == 0 ? flight : side == 1 ? -flight : side == 2 ? left : -left;
+      const Eigen::Vector3d toward = side == 0   ? flight
+                                     : side == 1 ? -flight
+                                     : side == 2 ? left
+                                                 : -left;
       forward = std::cos(kObliqueTilt * kDegrees) * Eigen::Vector3d(0, 0, -1) +
                 std::sin(kObliqueTilt * kDegrees) * toward + attitude_error;
     }
@@ -134,7 +140,8 @@ void WriteMatrixRow(std::ostream& stream, const Eigen::Matrix3d& matrix) {
 
 // What a drone writes into its JPEGs: focal length in mm with the sensor's size (as focal
 // plane resolution) and the 35 mm equivalent, pixel size, GPS position.
-ExifData AerialViewExif(const SyntheticSceneOptions& options, const Camera& camera, const Image& image) {
+ExifData AerialViewExif(const SyntheticSceneOptions& options, const Camera& camera,
+                        const Image& image) {
   constexpr double kSensorWidthMm = 6.4;
   ExifData exif;
   exif.make = "Parallax";
@@ -208,7 +215,8 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
   const double phase = std::uniform_real_distribution<double>(0.0, 2.0 * std::numbers::pi)(engine);
 
   Reconstruction views;
-  views.AddCamera(Camera::Create(1, CameraModelId::kPinhole, focal_length, options.width, options.height));
+  views.AddCamera(
+      Camera::Create(1, CameraModelId::kPinhole, focal_length, options.width, options.height));
   views.GetCamera(1).has_prior_focal_length = true;
   const int n = options.num_views;
   if (options.layout == SyntheticSceneOptions::Layout::kAerial) {
@@ -237,7 +245,8 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
       case SyntheticSceneOptions::Layout::kRing: {
         const double azimuth = phase + 2.0 * std::numbers::pi * i / n;
         const double radius = 21.0 * zoom;
-        center = Eigen::Vector3d(radius * std::cos(azimuth), radius * std::sin(azimuth), 0.45 * radius);
+        center =
+            Eigen::Vector3d(radius * std::cos(azimuth), radius * std::sin(azimuth), 0.45 * radius);
         target = Eigen::Vector3d(0.0, 0.0, 3.0);
         break;
       }
@@ -247,13 +256,15 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
         const double azimuth = phase + 2.0 * std::numbers::pi * turns * i / n;
         const double elevation = (10.0 + 55.0 * i / (n - 1)) * kDegrees;
         const double radius = 23.0 * zoom;
-        center = radius * Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
-                                          std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+        center =
+            radius * Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
+                                     std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
         center.z() += 1.0;
         target = Eigen::Vector3d(0.0, 0.0, 2.5);
         break;
       }
-      case SyntheticSceneOptions::Layout::kAerial: break;  // Returned above.
+      case SyntheticSceneOptions::Layout::kAerial:
+        break;  // Returned above.
       case SyntheticSceneOptions::Layout::kSequence: {
         // Walking past the row, the gaze swinging slowly forwards and backwards.
         const double x = row_middle - 0.5 * SequenceLength(options) + i * kSequenceStep;
@@ -282,9 +293,11 @@ GeodeticPosition SyntheticSurveyOrigin() { return {46.5191, 6.5668, 400.0}; }
 
 GeodeticPosition SyntheticGpsPosition(const SyntheticSceneOptions& options, image_t image_id,
                                       const Eigen::Vector3d& center) {
-  std::mt19937_64 engine(Mix32(static_cast<uint32_t>(options.seed) ^ 0x6B5Du) * 0x9E3779B97F4A7C15ull + image_id);
+  std::mt19937_64 engine(
+      Mix32(static_cast<uint32_t>(options.seed) ^ 0x6B5Du) * 0x9E3779B97F4A7C15ull + image_id);
   std::normal_distribution<double> noise(0.0, options.gps_noise);
-  const Eigen::Vector3d noisy = center + Eigen::Vector3d(noise(engine), noise(engine), 2.0 * noise(engine));
+  const Eigen::Vector3d noisy =
+      center + Eigen::Vector3d(noise(engine), noise(engine), 2.0 * noise(engine));
   return GeodeticFromEnu(noisy, SyntheticSurveyOrigin());
 }
 
@@ -294,8 +307,8 @@ RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, 
   render_options.shadows = options.shadows;
   render_options.blur_sigma = options.blur_sigma;
   render_options.noise_stddev = options.noise_stddev;
-  render_options.noise_seed = Mix32(static_cast<uint32_t>(options.seed) ^ Mix32(view_idx + 1)) +
-                              (options.seed >> 32);
+  render_options.noise_seed =
+      Mix32(static_cast<uint32_t>(options.seed) ^ Mix32(view_idx + 1)) + (options.seed >> 32);
   render_options.num_threads = options.num_threads;
   if (options.lighting_variation > 0.0) {
     std::mt19937_64 engine(options.seed * 0x9E3779B97F4A7C15ull + view_idx + 1);
@@ -306,8 +319,8 @@ RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, 
     const double elevation = std::clamp(std::asin(sun.z()) + 15.0 * kDegrees * x * uniform(engine),
                                         15.0 * kDegrees, 85.0 * kDegrees);
     render_options.sun_direction =
-        Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                        std::sin(elevation));
+        Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
+                        std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
     render_options.exposure = 1.0 + 0.25 * x * uniform(engine);
     render_options.ambient_intensity *= 1.0 + 0.2 * x * uniform(engine);
   }
@@ -336,9 +349,12 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
         aerial ? InsertJpegExif(EncodeJpeg(rendered, 92),
                                 EncodeExifTiff(AerialViewExif(options, camera, image)))
                : EncodePng(rendered);
-    WriteFileAtomically(output_dir / image.name, [&encoded](std::ostream& stream) {
-      stream.write(encoded.data(), static_cast<std::streamsize>(encoded.size()));
-    }, /*binary=*/true);
+    WriteFileAtomically(
+        output_dir / image.name,
+        [&encoded](std::ostream& stream) {
+          stream.write(encoded.data(), static_cast<std::streamsize>(encoded.size()));
+        },
+        /*binary=*/true);
     PARALLAX_LOG(Debug) << "rendered " << image.name;
   });
 
@@ -376,8 +392,9 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
     for (const auto& [image_id, image] : views.Images()) {
       const Eigen::Quaterniond& q = image.cam_from_world.rotation;
       const Eigen::Vector3d& t = image.cam_from_world.translation;
-      stream << image_id << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << t.x()
-             << ' ' << t.y() << ' ' << t.z() << ' ' << image.camera_id << ' ' << image.name << "\n\n";
+      stream << image_id << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' '
+             << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << image.camera_id << ' ' << image.name
+             << "\n\n";
     }
   });
   WriteFileAtomically(output_dir / "gt" / "points3D.txt", [](std::ostream& stream) {
@@ -390,20 +407,22 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
     CovisibilityOptions covisibility_options;
     covisibility_options.seed = options.seed;
     covisibility_options.num_threads = options.num_threads;
-    const std::vector<CovisiblePair> pairs = ComputeCovisiblePairs(scene, views, covisibility_options);
+    const std::vector<CovisiblePair> pairs =
+        ComputeCovisiblePairs(scene, views, covisibility_options);
     WriteFileAtomically(output_dir / "gt" / "overlap_pairs.txt", [&](std::ostream& stream) {
       for (const CovisiblePair& pair : pairs) {
-        stream << views.GetImage(pair.image_id1).name << ' ' << views.GetImage(pair.image_id2).name << ' '
-               << pair.num_shared_points << '\n';
+        stream << views.GetImage(pair.image_id1).name << ' ' << views.GetImage(pair.image_id2).name
+               << ' ' << pair.num_shared_points << '\n';
       }
     });
     PARALLAX_LOG(Info) << "synthetic scene: " << pairs.size() << " pairs of views share at least "
                        << covisibility_options.min_shared_points << " scene points ("
                        << covisibility_timer.ElapsedSeconds() << " s)";
   }
-  PARALLAX_LOG(Info) << "synthetic scene: " << views.NumImages() << " views of " << options.width << "x"
-                     << options.height << " in " << output_dir.string() << " ("
-                     << scene.Options().num_temples << " temple(s), " << timer.ElapsedSeconds() << " s)";
+  PARALLAX_LOG(Info) << "synthetic scene: " << views.NumImages() << " views of " << options.width
+                     << "x" << options.height << " in " << output_dir.string() << " ("
+                     << scene.Options().num_temples << " temple(s), " << timer.ElapsedSeconds()
+                     << " s)";
   return views;
 }
 

@@ -82,12 +82,12 @@ GeodeticPosition SyntheticGpsPosition(const SyntheticSceneOptions& options, imag
 RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, int view_idx);
 
 // Renders every view into `output_dir` (created if needed) as view_0001.png... (aerial:
-// IMG_00001.jpg... with EXIF focal length, sensor size and GPS), and writes the exact cameras: `<name>_par.txt` (first line the count, then per view
-// `name k11..k33 r11..r33 t1 t2 t3`, projection K [R | t] world to camera, COLMAP's pixel
-// convention), `K.txt` (3x3) and a COLMAP text model gt/{cameras,images,points3D}.txt
-// without points; aerial surveys add gt/overlap_pairs.txt, one line `NAME1 NAME2 SHARED`
-// per pair of views that see at least 30 scene points in common (ComputeCovisiblePairs).
-// Deterministic for a seed. Returns the views (as SyntheticSceneViews).
+// IMG_00001.jpg... with EXIF focal length, sensor size and GPS), and writes the exact cameras:
+// `<name>_par.txt` (first line the count, then per view `name k11..k33 r11..r33 t1 t2 t3`,
+// projection K [R | t] world to camera, COLMAP's pixel convention), `K.txt` (3x3) and a COLMAP text
+// model gt/{cameras,images,points3D}.txt without points; aerial surveys add gt/overlap_pairs.txt,
+// one line `NAME1 NAME2 SHARED` per pair of views that see at least 30 scene points in common
+// (ComputeCovisiblePairs). Deterministic for a seed. Returns the views (as SyntheticSceneViews).
 Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
                                       const std::filesystem::path& output_dir);
 

@@ -4,11 +4,11 @@
 
 #include "parallax/util/eigen_matchers.h"
 
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
-#include <unistd.h>
 
 #include "parallax/calibration/exif.h"
 #include "parallax/scene/colmap_io.h"
@@ -55,7 +55,9 @@ TEST(SyntheticSceneViews, EveryLayoutLooksAtTheScene) {
       EXPECT_LT(hit.distance, 40.0);
       EXPECT_GT(image.ProjectionCenter().z(), 1.0);
       if (image_id > 1) {
-        max_step = std::max(max_step, (image.ProjectionCenter() - views.GetImage(image_id - 1).ProjectionCenter()).norm());
+        max_step = std::max(
+            max_step,
+            (image.ProjectionCenter() - views.GetImage(image_id - 1).ProjectionCenter()).norm());
       }
     }
     // Consecutive views stay close, so that sequential matching works.
@@ -86,7 +88,8 @@ TEST(SyntheticSceneViews, DeterministicForASeed) {
   options.lighting_variation = 1.0;
   EXPECT_NE(SyntheticSceneRenderOptions(options, 0).sun_direction,
             SyntheticSceneRenderOptions(options, 1).sun_direction);
-  EXPECT_EQ(SyntheticSceneRenderOptions(options, 1).exposure, SyntheticSceneRenderOptions(options, 1).exposure);
+  EXPECT_EQ(SyntheticSceneRenderOptions(options, 1).exposure,
+            SyntheticSceneRenderOptions(options, 1).exposure);
   options.lighting_variation = 2.0;
   EXPECT_THROW(SyntheticSceneViews(options), CheckError);
   EXPECT_THROW(SyntheticSceneLayoutFromName("spiral"), InputError);
@@ -142,8 +145,10 @@ TEST_F(SyntheticSceneTest, WritesImagesAndExactCameras) {
   for (const auto& [image_id, image] : views.Images()) {
     const Image& read = gt.GetImage(image_id);
     EXPECT_EQ(read.name, image.name);
-    EXPECT_LT(RotationAngleDegrees(read.cam_from_world.rotation, image.cam_from_world.rotation), 1e-9);
-    EXPECT_THAT(read.cam_from_world.translation, EigenMatrixNear(image.cam_from_world.translation, 1e-12));
+    EXPECT_LT(RotationAngleDegrees(read.cam_from_world.rotation, image.cam_from_world.rotation),
+              1e-9);
+    EXPECT_THAT(read.cam_from_world.translation,
+                EigenMatrixNear(image.cam_from_world.translation, 1e-12));
   }
 
   // The same options write the same bytes.
@@ -188,8 +193,8 @@ TEST(SyntheticSceneViews, AerialSurveyFliesStripsOverTheTown) {
 }
 
 TEST(SyntheticScene, AerialJpegsCarryExifFocalAndGps) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("parallax_aerial_scene_test_" + std::to_string(::getpid()));
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("parallax_aerial_scene_test_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   SyntheticSceneOptions options;
   options.layout = SyntheticSceneOptions::Layout::kAerial;
@@ -203,8 +208,8 @@ TEST(SyntheticScene, AerialJpegsCarryExifFocalAndGps) {
     ASSERT_TRUE(exif.has_value()) << image.name;
     EXPECT_NEAR(*FocalLengthPixelsFromExif(*exif, 160, 120), 144.0, 0.01);
     ASSERT_TRUE(exif->gps_latitude && exif->gps_longitude && exif->gps_altitude);
-    const Eigen::Vector3d enu = EnuFromGeodetic({*exif->gps_latitude, *exif->gps_longitude, *exif->gps_altitude},
-                                                SyntheticSurveyOrigin());
+    const Eigen::Vector3d enu = EnuFromGeodetic(
+        {*exif->gps_latitude, *exif->gps_longitude, *exif->gps_altitude}, SyntheticSurveyOrigin());
     // 3 m of noise horizontally, 6 m vertically: well within 20 m.
     EXPECT_LT((enu - image.ProjectionCenter()).norm(), 20.0) << image.name;
     EXPECT_FALSE(cv::imread((dir / image.name).string()).empty());

@@ -42,7 +42,8 @@ class NameMatcher {
   }
 
  private:
-  static void Insert(const std::string& key, size_t index, std::unordered_map<std::string, long>* map) {
+  static void Insert(const std::string& key, size_t index,
+                     std::unordered_map<std::string, long>* map) {
     const auto [it, inserted] = map->emplace(key, static_cast<long>(index));
     if (!inserted) it->second = -1;  // ambiguous
   }
@@ -55,8 +56,7 @@ ErrorStatistics ComputeStatistics(std::vector<double> values) {
   if (values.empty()) return statistics;
   std::sort(values.begin(), values.end());
   const size_t mid = values.size() / 2;
-  statistics.median =
-      values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
+  statistics.median = values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
   double sum = 0;
   for (double value : values) sum += value;
   statistics.mean = sum / values.size();
@@ -95,7 +95,8 @@ nlohmann::json StatisticsToJson(const ErrorStatistics& statistics) {
 nlohmann::json CurveToJson(const std::vector<AccuracyAtThreshold>& curve) {
   nlohmann::json array = nlohmann::json::array();
   for (const AccuracyAtThreshold& point : curve) {
-    array.push_back({{"threshold", point.threshold}, {"fraction", point.fraction}, {"auc", point.auc}});
+    array.push_back(
+        {{"threshold", point.threshold}, {"fraction", point.fraction}, {"auc", point.auc}});
   }
   return array;
 }
@@ -164,7 +165,8 @@ EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const Grou
   }
   if (!gt.images.empty()) gt_centroid /= static_cast<double>(gt.images.size());
   for (const GroundTruthImage& view : gt.images) {
-    metrics.gt_scene_scale += (parallax::ProjectionCenter(view.cam_from_world) - gt_centroid).norm();
+    metrics.gt_scene_scale +=
+        (parallax::ProjectionCenter(view.cam_from_world) - gt_centroid).norm();
   }
   if (!gt.images.empty()) metrics.gt_scene_scale /= static_cast<double>(gt.images.size());
 
@@ -185,8 +187,8 @@ EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const Grou
     }
   }
   if (!metrics.alignment_success) {
-    PARALLAX_LOG(Warning) << "evaluation: no similarity aligns the model with " << gt.source
-                          << " (" << matched_gt_indices.size() << " registered images in the GT)";
+    PARALLAX_LOG(Warning) << "evaluation: no similarity aligns the model with " << gt.source << " ("
+                          << matched_gt_indices.size() << " registered images in the GT)";
   }
 
   constexpr double kFailed = std::numeric_limits<double>::infinity();
@@ -199,9 +201,9 @@ EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const Grou
       const Image& image = model.GetImage(evaluation.image_id);
       const GroundTruthImage& view = gt.images[gt_index];
       const Rigid3d cam_from_gt = TransformCameraPose(metrics.gt_from_model, image.cam_from_world);
-      evaluation.center_error =
-          (parallax::ProjectionCenter(cam_from_gt) - parallax::ProjectionCenter(view.cam_from_world))
-              .norm();
+      evaluation.center_error = (parallax::ProjectionCenter(cam_from_gt) -
+                                 parallax::ProjectionCenter(view.cam_from_world))
+                                    .norm();
       evaluation.center_error_ratio = evaluation.center_error / metrics.gt_scene_scale;
       evaluation.rotation_error_deg =
           RotationAngleDegrees(cam_from_gt.rotation, view.cam_from_world.rotation);

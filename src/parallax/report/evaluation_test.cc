@@ -35,7 +35,8 @@ GroundTruth GroundTruthOf(const Reconstruction& truth) {
 
 Sim3d RandomSim3d() {
   const Eigen::Vector3d axis =
-      Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1)).normalized();
+      Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
+          .normalized();
   const Eigen::Quaterniond rotation(Eigen::AngleAxisd(RandomUniformReal(0.2, 3.0), axis));
   const Eigen::Vector3d translation(RandomUniformReal(-10, 10), RandomUniformReal(-10, 10),
                                     RandomUniformReal(-10, 10));

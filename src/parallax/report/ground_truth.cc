@@ -24,7 +24,8 @@ constexpr double kMaxRotationDeviation = 1e-3;
 constexpr double kMaxNumViews = 1e7;
 constexpr double kMaxImageSide = 1e6;
 
-[[noreturn]] void ThrowAt(const std::string& source, size_t line_number, const std::string& reason) {
+[[noreturn]] void ThrowAt(const std::string& source, size_t line_number,
+                          const std::string& reason) {
   throw InputError(source + ":" + std::to_string(line_number) + ": " + reason);
 }
 
@@ -51,16 +52,16 @@ Eigen::Matrix3d CheckedRotation(const Eigen::Matrix3d& matrix, const std::string
   const double deviation = (matrix.transpose() * matrix - Eigen::Matrix3d::Identity()).norm();
   // Written so that NaN (from huge entries: inf - inf) fails too.
   if (!(deviation <= kMaxRotationDeviation) || !(matrix.determinant() > 0)) {
-    ThrowAt(source, line_number, "R is not a rotation matrix (|RᵀR - I| = " +
-                                     std::to_string(deviation) +
-                                     ", det = " + std::to_string(matrix.determinant()) + ")");
+    ThrowAt(source, line_number,
+            "R is not a rotation matrix (|RᵀR - I| = " + std::to_string(deviation) +
+                ", det = " + std::to_string(matrix.determinant()) + ")");
   }
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(matrix, Eigen::ComputeFullU | Eigen::ComputeFullV);
   return svd.matrixU() * svd.matrixV().transpose();
 }
 
-Camera CameraFromK(const Eigen::Matrix3d& K, size_t width, size_t height,
-                   const std::string& source, size_t line_number) {
+Camera CameraFromK(const Eigen::Matrix3d& K, size_t width, size_t height, const std::string& source,
+                   size_t line_number) {
   if (K(0, 0) <= 0 || K(1, 1) <= 0 || K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 ||
       K(2, 2) != 1) {
     ThrowAt(source, line_number,
@@ -116,7 +117,8 @@ GroundTruth ReadMiddleburyGroundTruth(std::istream& stream, const std::string& s
     }
     double values[21];
     for (int i = 0; i < 21; ++i) values[i] = ParseFinite(tokens[i + 1], source, line_number);
-    const Eigen::Matrix3d K = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(values);
+    const Eigen::Matrix3d K =
+        Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(values);
     const Eigen::Matrix3d R =
         Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(values + 9);
     const Eigen::Vector3d t(values[18], values[19], values[20]);
@@ -182,8 +184,8 @@ GroundTruthImage ReadStrechaCamera(std::istream& stream, const std::string& sour
   }
   GroundTruthImage image;
   image.name = image_name;
-  image.camera = CameraFromK(K, static_cast<size_t>(width), static_cast<size_t>(height), source,
-                              row_lines[0]);
+  image.camera =
+      CameraFromK(K, static_cast<size_t>(width), static_cast<size_t>(height), source, row_lines[0]);
   const Eigen::Matrix3d cam_from_world_rotation =
       CheckedRotation(world_from_cam_rotation, source, row_lines[4]).transpose();
   image.cam_from_world = Rigid3d(cam_from_world_rotation, -cam_from_world_rotation * center);

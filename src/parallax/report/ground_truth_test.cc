@@ -35,7 +35,8 @@ TEST(MiddleburyGroundTruth, ParsesWindowsLineEndingsAndTrailingSpaces) {
   std::istringstream stream(
       "2\r\n"
       "a.png 100 0 50 0 110 40 0 0 1 1 0 0 0 1 0 0 0 1 1 2 3 \r\n"
-      "b.png 100 0 50 0 110 40 0 0 1 " + std::string(kRotationRows) + " -1 0 0.5  \r\n\r\n");
+      "b.png 100 0 50 0 110 40 0 0 1 " +
+      std::string(kRotationRows) + " -1 0 0.5  \r\n\r\n");
   const GroundTruth truth = ReadMiddleburyGroundTruth(stream, "par.txt");
   ASSERT_EQ(truth.images.size(), 2u);
   EXPECT_EQ(truth.images[0].name, "a.png");
@@ -82,7 +83,8 @@ TEST(StrechaGroundTruth, ParsesOneCamera) {
   std::ostringstream text;
   text << "2000 0 1000 \r\n0 2001 700 \r\n0 0 1 \r\n0 0 0\r\n";
   for (int r = 0; r < 3; ++r) {
-    text << world_from_cam(r, 0) << " " << world_from_cam(r, 1) << " " << world_from_cam(r, 2) << " \r\n";
+    text << world_from_cam(r, 0) << " " << world_from_cam(r, 1) << " " << world_from_cam(r, 2)
+         << " \r\n";
   }
   text << center.x() << " " << center.y() << " " << center.z() << " \r\n2000 1400\r\n";
   std::istringstream stream(text.str());
@@ -92,7 +94,8 @@ TEST(StrechaGroundTruth, ParsesOneCamera) {
   EXPECT_EQ(image.camera.height, 1400u);
   EXPECT_EQ(image.camera.params, (std::vector<double>{2000, 2001, 1000, 700}));
   EXPECT_THAT(ProjectionCenter(image.cam_from_world), EigenMatrixNear(center, 1e-12));
-  EXPECT_THAT(image.cam_from_world.rotation.toRotationMatrix(), EigenMatrixNear(world_from_cam.transpose(), 1e-12));
+  EXPECT_THAT(image.cam_from_world.rotation.toRotationMatrix(),
+              EigenMatrixNear(world_from_cam.transpose(), 1e-12));
 }
 
 TEST(StrechaGroundTruth, RejectsMalformedFiles) {
@@ -116,16 +119,16 @@ TEST(StrechaGroundTruth, RejectsMalformedFiles) {
 // matrix with huge entries gave NaN checks that passed.
 TEST(MiddleburyGroundTruth, RejectsHugeCountsAndEntries) {
   std::istringstream huge_count("1e300\na.png 100 0 50 0 110 40 0 0 1 1 0 0 0 1 0 0 0 1 1 2 3\n");
-  ExpectInputError([&] { ReadMiddleburyGroundTruth(huge_count, "par.txt"); }, "par.txt:1: ",
-                   "the number of views 1e300 is too large");
+  ExpectInputError([&] { ReadMiddleburyGroundTruth(huge_count, "par.txt"); },
+                   "par.txt:1: ", "the number of views 1e300 is too large");
   std::istringstream huge_rotation(
       "1\na.png 100 0 50 0 110 40 0 0 1 1e200 1e200 0 1e200 1e200 0 0 0 1 1 2 3\n");
-  ExpectInputError([&] { ReadMiddleburyGroundTruth(huge_rotation, "par.txt"); }, "par.txt:2: ",
-                   "R is not a rotation matrix");
+  ExpectInputError([&] { ReadMiddleburyGroundTruth(huge_rotation, "par.txt"); },
+                   "par.txt:2: ", "R is not a rotation matrix");
   std::istringstream mixed_signs(
       "1\na.png 100 0 50 0 110 40 0 0 1 1e300 -1e300 0 1e300 1e300 0 0 0 1 1 2 3\n");
-  ExpectInputError([&] { ReadMiddleburyGroundTruth(mixed_signs, "par.txt"); }, "par.txt:2: ",
-                   "R is not a rotation matrix");
+  ExpectInputError([&] { ReadMiddleburyGroundTruth(mixed_signs, "par.txt"); },
+                   "par.txt:2: ", "R is not a rotation matrix");
 }
 
 TEST(StrechaGroundTruth, RejectsHugeImageSizes) {
@@ -133,8 +136,8 @@ TEST(StrechaGroundTruth, RejectsHugeImageSizes) {
     std::istringstream stream(std::string("300 0 32\n0 300 24\n0 0 1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
                                           "0 0 -5\n") +
                               size + "\n");
-    ExpectInputError([&] { ReadStrechaCamera(stream, "a.camera", "a"); }, "a.camera:9: ",
-                     "image size must be two positive integers up to 1000000");
+    ExpectInputError([&] { ReadStrechaCamera(stream, "a.camera", "a"); },
+                     "a.camera:9: ", "image size must be two positive integers up to 1000000");
   }
 }
 
@@ -153,8 +156,10 @@ TEST(GroundTruth, DetectsFormatAndRejectsUnknownFolders) {
   EXPECT_EQ(strecha.images[0].name, "a.jpg");
   EXPECT_EQ(strecha.images[1].name, "b.jpg");
   EXPECT_TRUE(ReadGroundTruth(dir / "par.txt").images.empty());
-  ExpectInputError([&] { ReadGroundTruth(dir / "empty"); }, (dir / "empty").string(), "not a ground truth");
-  ExpectInputError([&] { ReadGroundTruth(dir / "missing"); }, (dir / "missing").string(), "no such");
+  ExpectInputError([&] { ReadGroundTruth(dir / "empty"); }, (dir / "empty").string(),
+                   "not a ground truth");
+  ExpectInputError([&] { ReadGroundTruth(dir / "missing"); }, (dir / "missing").string(),
+                   "no such");
   std::filesystem::remove_all(dir);
 }
 
@@ -191,15 +196,19 @@ TEST(GroundTruth, ReadsFountain) {
   EXPECT_EQ(truth.images[0].camera.width, 3072u);
   EXPECT_NEAR(truth.images[0].camera.FocalLengthX(), 2759.48, 1e-9);
   EXPECT_LT((ProjectionCenter(truth.images[0].cam_from_world) -
-             Eigen::Vector3d(-7.28137, -7.57667, 0.204446)).norm(), 1e-9);
+             Eigen::Vector3d(-7.28137, -7.57667, 0.204446))
+                .norm(),
+            1e-9);
   // Neighbouring views are a few metres apart at most and look roughly the same way.
   for (size_t i = 1; i < truth.images.size(); ++i) {
     const double baseline = (ProjectionCenter(truth.images[i].cam_from_world) -
-                             ProjectionCenter(truth.images[i - 1].cam_from_world)).norm();
+                             ProjectionCenter(truth.images[i - 1].cam_from_world))
+                                .norm();
     EXPECT_GT(baseline, 0.1);
     EXPECT_LT(baseline, 3.0);
     EXPECT_LT(RotationAngleDegrees(truth.images[i].cam_from_world.rotation,
-                                   truth.images[i - 1].cam_from_world.rotation), 30.0);
+                                   truth.images[i - 1].cam_from_world.rotation),
+              30.0);
   }
 }
 

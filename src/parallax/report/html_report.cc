@@ -163,10 +163,12 @@ class ReportBuilder {
             entry["image_id"].is_number_unsigned()) {
           record.image_id = entry["image_id"].get<image_t>();
         }
-        if (record.model_image_id == kInvalidImageId && entry.contains("registered") && entry["registered"].is_boolean()) {
+        if (record.model_image_id == kInvalidImageId && entry.contains("registered") &&
+            entry["registered"].is_boolean()) {
           record.registered = entry["registered"].get<bool>();
         }
-        if (const auto value = OptionalNumber(entry, "num_keypoints"); value && record.num_keypoints < 0) {
+        if (const auto value = OptionalNumber(entry, "num_keypoints");
+            value && record.num_keypoints < 0) {
           record.num_keypoints = static_cast<long>(*value);
         }
         if (const auto value = OptionalNumber(entry, "num_observations");
@@ -203,8 +205,10 @@ class ReportBuilder {
                     {"registered", record.registered},
                     {"keypoints", record.num_keypoints},
                     {"observations", record.num_observations},
-                    {"error_before_ba", record.error_before_ba ? json(Round4(*record.error_before_ba)) : json()},
-                    {"error_after_ba", record.error_after_ba ? json(Round4(*record.error_after_ba)) : json()}};
+                    {"error_before_ba",
+                     record.error_before_ba ? json(Round4(*record.error_before_ba)) : json()},
+                    {"error_after_ba",
+                     record.error_after_ba ? json(Round4(*record.error_after_ba)) : json()}};
       if (!record.reason.empty()) entry["reason"] = record.reason;
       images.push_back(std::move(entry));
     }
@@ -223,7 +227,8 @@ class ReportBuilder {
       return std::pair{it1->second, it2->second};
     };
     for (const auto& [pair_id, matches] : inputs_.database->ReadAllMatches()) {
-      if (const auto pair = indices(pair_id)) counts[*pair].first = static_cast<long>(matches.size());
+      if (const auto pair = indices(pair_id))
+        counts[*pair].first = static_cast<long>(matches.size());
     }
     size_t best_inliers = 0;
     image_pair_t best_pair_id = 0;
@@ -258,7 +263,8 @@ class ReportBuilder {
     json lines = json::array();
     for (size_t i = 0; i < num_matches; i += step) {
       const FeatureMatch& match = geometry.inlier_matches[i];
-      if (match.point2D_idx1 >= keypoints1.size() || match.point2D_idx2 >= keypoints2.size()) continue;
+      if (match.point2D_idx1 >= keypoints1.size() || match.point2D_idx2 >= keypoints2.size())
+        continue;
       const FeatureKeypoint& a = keypoints1[match.point2D_idx1];
       const FeatureKeypoint& b = keypoints2[match.point2D_idx2];
       for (double value : {a.x, a.y, b.x, b.y}) lines.push_back(Round1(value));
@@ -279,13 +285,16 @@ class ReportBuilder {
       frame_index = it->second;
     } else {
       const ImageRecord& record = records_[record_index];
-      const EmbeddedImage embedded =
-          inputs_.image_dir.empty() ? EmbeddedImage() : EmbedImage(inputs_.image_dir / record.name, options_);
+      const EmbeddedImage embedded = inputs_.image_dir.empty()
+                                         ? EmbeddedImage()
+                                         : EmbedImage(inputs_.image_dir / record.name, options_);
       json frame = {{"image", record_index}, {"url", embedded.data_url}};
       double width = embedded.width, height = embedded.height;
       if (embedded.data_url.empty() && record.camera != nullptr) {
-        width = record.camera->width > 0 ? record.camera->width : 2 * record.camera->PrincipalPointX();
-        height = record.camera->height > 0 ? record.camera->height : 2 * record.camera->PrincipalPointY();
+        width =
+            record.camera->width > 0 ? record.camera->width : 2 * record.camera->PrincipalPointX();
+        height = record.camera->height > 0 ? record.camera->height
+                                           : 2 * record.camera->PrincipalPointY();
       }
       frame["width"] = width;
       frame["height"] = height;
@@ -295,9 +304,9 @@ class ReportBuilder {
     }
     if (keypoints != nullptr) {
       json flat = json::array();
-      const size_t step = std::max<size_t>(
-          1, (keypoints->size() + options_.max_keypoints_drawn - 1) /
-                 static_cast<size_t>(options_.max_keypoints_drawn));
+      const size_t step =
+          std::max<size_t>(1, (keypoints->size() + options_.max_keypoints_drawn - 1) /
+                                  static_cast<size_t>(options_.max_keypoints_drawn));
       for (size_t i = 0; i < keypoints->size(); i += step) {
         const FeatureKeypoint& keypoint = (*keypoints)[i];
         flat.push_back(Round1(keypoint.x));
@@ -471,7 +480,8 @@ json ReportBuilder::SceneJson() const {
   }
   scene["num_points"] = xyz.size() / 3;
   scene["num_points_total"] = points.size();
-  scene["points"] = Base64Encode(reinterpret_cast<const uint8_t*>(xyz.data()), xyz.size() * sizeof(float));
+  scene["points"] =
+      Base64Encode(reinterpret_cast<const uint8_t*>(xyz.data()), xyz.size() * sizeof(float));
   scene["colors"] = Base64Encode(rgb.data(), rgb.size());
   scene["cameras"] = std::move(camera_list);
   scene["center"] = {center.x(), center.y(), center.z()};
@@ -486,11 +496,20 @@ std::string EscapeHtml(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out.push_back(c);
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out.push_back(c);
     }
   }
   return out;
@@ -537,8 +556,8 @@ std::string BuildHtmlReport(const HtmlReportInputs& inputs, const HtmlReportOpti
   html += "<div id=\"report-pixels\" hidden>-1</div>\n";
   html += "<div id=\"report\"></div>\n";
   html += "<div id=\"tooltip\" class=\"tooltip\"></div>\n";
-  html += "<script type=\"application/json\" id=\"report-data\">" + JsonForScript(data) +
-          "</script>\n";
+  html +=
+      "<script type=\"application/json\" id=\"report-data\">" + JsonForScript(data) + "</script>\n";
   for (const char* script : {internal::HtmlReportPlotsScript(), internal::HtmlReportViewerScript(),
                              internal::HtmlReportMainScript()}) {
     html += "<script>\n" + std::string(script) + "</script>\n";

@@ -41,8 +41,7 @@ class ReportFixture : public ::testing::Test {
     // Colour points by position so that the cloud shows on the dark 3D view.
     for (const auto& [point3D_id, point] : truth_.Points3D()) {
       const Eigen::Vector3d t = (point.xyz.array() + 1.0).matrix() * 0.5 * 255.0;
-      model_.GetPoint3D(point3D_id).color =
-          t.cwiseMax(40.0).cwiseMin(255.0).cast<uint8_t>();
+      model_.GetPoint3D(point3D_id).color = t.cwiseMax(40.0).cwiseMin(255.0).cast<uint8_t>();
     }
     unregistered_id_ = model_.RegImageIds().back();
     model_.DeRegisterImage(unregistered_id_);
@@ -52,7 +51,8 @@ class ReportFixture : public ::testing::Test {
       const Eigen::Vector3d axis = Eigen::Vector3d::Random().normalized();
       const double angle = RandomUniformReal(0.0, 0.5) * M_PI / 180.0;
       cam_from_world.rotation =
-          (Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)) * cam_from_world.rotation).normalized();
+          (Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)) * cam_from_world.rotation)
+              .normalized();
       cam_from_world.translation += 0.02 * Eigen::Vector3d::Random();
     }
 
@@ -70,16 +70,20 @@ class ReportFixture : public ::testing::Test {
       cv::imwrite((dir_ / "images" / image.name).string(), pixels);
     }
 
-    summary_ = {{"images_total", truth_.NumImages()},
-                {"images_registered", model_.NumRegImages()},
-                {"points3D", model_.NumPoints3D()},
-                {"mean_track_length", model_.ComputeMeanTrackLength()},
-                {"mean_reprojection_error_px", 0.42},
-                {"timings_s", {{"features", 1.5}, {"matching", 2.25}, {"mapping", 3.0}, {"total", 6.9}}},
-                {"models", {{{"path", "sparse/0"}, {"images_registered", model_.NumRegImages()},
-                             {"points3D", model_.NumPoints3D()}}}}};
+    summary_ = {
+        {"images_total", truth_.NumImages()},
+        {"images_registered", model_.NumRegImages()},
+        {"points3D", model_.NumPoints3D()},
+        {"mean_track_length", model_.ComputeMeanTrackLength()},
+        {"mean_reprojection_error_px", 0.42},
+        {"timings_s", {{"features", 1.5}, {"matching", 2.25}, {"mapping", 3.0}, {"total", 6.9}}},
+        {"models",
+         {{{"path", "sparse/0"},
+           {"images_registered", model_.NumRegImages()},
+           {"points3D", model_.NumPoints3D()}}}}};
     for (const auto& [image_id, image] : model_.Images()) {
-      nlohmann::json entry = {{"image_id", image_id}, {"name", image.name},
+      nlohmann::json entry = {{"image_id", image_id},
+                              {"name", image.name},
                               {"registered", image.registered},
                               {"num_keypoints", image.NumPoints2D()},
                               {"num_observations", image.num_points3D}};
@@ -165,7 +169,8 @@ TEST_F(ReportFixture, EmbedsEveryDataSet) {
   const auto geometries = database_->ReadTwoViewGeometryNumInliers();
   ASSERT_EQ(data["pairs"].size(), database_->NumMatchedPairs());
   long max_inliers = 0;
-  for (const auto& [pair_id, num_inliers] : geometries) max_inliers = std::max<long>(max_inliers, num_inliers);
+  for (const auto& [pair_id, num_inliers] : geometries)
+    max_inliers = std::max<long>(max_inliers, num_inliers);
   long max_in_pairs = 0;
   for (const auto& pair : data["pairs"]) {
     EXPECT_GE(pair[2].get<long>(), pair[3].get<long>());
@@ -189,7 +194,8 @@ TEST_F(ReportFixture, EmbedsEveryDataSet) {
   // Scene: every point and every registered camera.
   EXPECT_EQ(data["scene"]["num_points"], model_.NumPoints3D());
   EXPECT_EQ(data["scene"]["cameras"].size(), model_.NumRegImages());
-  EXPECT_EQ(data["scene"]["points"].get<std::string>().size(), (model_.NumPoints3D() * 12 + 2) / 3 * 4);
+  EXPECT_EQ(data["scene"]["points"].get<std::string>().size(),
+            (model_.NumPoints3D() * 12 + 2) / 3 * 4);
   EXPECT_EQ(data["evaluation"]["images_registered_in_gt"], model_.NumRegImages());
   EXPECT_EQ(data["summary"]["timings_s"]["mapping"], 3.0);
 }
@@ -236,7 +242,8 @@ TEST_F(ReportFixture, WritesTheFile) {
 std::string FindChromium() {
   if (const char* path = std::getenv("PARALLAX_CHROMIUM")) return path;
   for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
-    if (std::system(("command -v " + std::string(name) + " >/dev/null 2>&1").c_str()) == 0) return name;
+    if (std::system(("command -v " + std::string(name) + " >/dev/null 2>&1").c_str()) == 0)
+      return name;
   }
   return "";
 }
@@ -269,9 +276,11 @@ TEST(HtmlReport, FramesTheTempleRing) {
     model.AddImage(image);
     model.RegisterImage(image.image_id);
   }
-  const Eigen::Vector3d box_min(-0.023121, -0.038009, -0.091940), box_max(0.078626, 0.121636, -0.017395);
+  const Eigen::Vector3d box_min(-0.023121, -0.038009, -0.091940),
+      box_max(0.078626, 0.121636, -0.017395);
   for (int i = 0; i < 3000; ++i) {
-    const Eigen::Vector3d t(RandomUniformReal(0, 1), RandomUniformReal(0, 1), RandomUniformReal(0, 1));
+    const Eigen::Vector3d t(RandomUniformReal(0, 1), RandomUniformReal(0, 1),
+                            RandomUniformReal(0, 1));
     const Eigen::Vector3d xyz = box_min + t.cwiseProduct(box_max - box_min);
     model.AddPoint3D(xyz, Track(), (Eigen::Vector3d(200, 170, 120) + 55 * t).cast<uint8_t>());
   }
@@ -308,9 +317,11 @@ TEST(HtmlReport, FramesTheTempleRing) {
   const fs::path html_path = OutputFolder() / "html_report_temple.html";
   WriteHtmlReport(inputs, html_path);
   const fs::path png_path = OutputFolder() / "html_report_temple.png";
-  const std::string command = "timeout 180 " + chromium +
+  const std::string command =
+      "timeout 180 " + chromium +
       " --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader --hide-scrollbars"
-      " --user-data-dir=" + (fs::temp_directory_path() / ("parallax_chromium_" + std::to_string(getpid()))).string() +
+      " --user-data-dir=" +
+      (fs::temp_directory_path() / ("parallax_chromium_" + std::to_string(getpid()))).string() +
       " --window-size=1400,2000 --screenshot=" + png_path.string() + " file://" +
       fs::absolute(html_path).string() + " > /dev/null 2>&1";
   EXPECT_EQ(std::system(command.c_str()), 0);
@@ -330,11 +341,14 @@ TEST_F(ReportFixture, RunsInHeadlessChromiumWithoutErrors) {
   const std::string flags =
       " --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader --no-first-run"
       " --disable-dev-shm-usage --hide-scrollbars --enable-logging=stderr --v=0"
-      " --virtual-time-budget=5000 --user-data-dir=" + (dir_ / "profile").string();
+      " --virtual-time-budget=5000 --user-data-dir=" +
+      (dir_ / "profile").string();
   const fs::path dom_path = dir_ / "dom.html", log_path = dir_ / "chromium.log";
   const std::string url = "file://" + fs::absolute(html_path).string();
-  ASSERT_EQ(std::system(("timeout 180 " + chromium + flags + " --dump-dom " + url + "?selftest=1 > " +
-                         dom_path.string() + " 2> " + log_path.string()).c_str()), 0)
+  ASSERT_EQ(std::system(("timeout 180 " + chromium + flags + " --dump-dom " + url +
+                         "?selftest=1 > " + dom_path.string() + " 2> " + log_path.string())
+                            .c_str()),
+            0)
       << ReadFileToString(log_path);
   const std::string dom = ReadFileToString(dom_path);
   std::smatch match;
@@ -356,8 +370,11 @@ TEST_F(ReportFixture, RunsInHeadlessChromiumWithoutErrors) {
   }
 
   fs::remove(png_path);
-  ASSERT_EQ(std::system(("timeout 180 " + chromium + flags + " --window-size=1400,7000 --screenshot=" +
-                         png_path.string() + " " + url + " > /dev/null 2>&1").c_str()), 0);
+  ASSERT_EQ(std::system(("timeout 180 " + chromium + flags +
+                         " --window-size=1400,7000 --screenshot=" + png_path.string() + " " + url +
+                         " > /dev/null 2>&1")
+                            .c_str()),
+            0);
   ASSERT_TRUE(fs::exists(png_path));
   EXPECT_GT(fs::file_size(png_path), 50000u);
   std::cerr << "screenshot: " << png_path.string() << "\n";

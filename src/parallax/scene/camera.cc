@@ -6,8 +6,8 @@
 
 namespace parallax {
 
-Camera Camera::Create(camera_t camera_id, CameraModelId model_id, double focal_length,
-                      size_t width, size_t height) {
+Camera Camera::Create(camera_t camera_id, CameraModelId model_id, double focal_length, size_t width,
+                      size_t height) {
   Camera camera;
   camera.camera_id = camera_id;
   camera.model_id = model_id;

@@ -20,16 +20,24 @@ void WriteImagesBinary(const Reconstruction& reconstruction, std::ostream& strea
 void WritePoints3DBinary(const Reconstruction& reconstruction, std::ostream& stream);
 
 // `source` names the stream in error messages.
-void ReadCamerasText(std::istream& stream, const std::string& source, Reconstruction* reconstruction);
-void ReadImagesText(std::istream& stream, const std::string& source, Reconstruction* reconstruction);
-void ReadPoints3DText(std::istream& stream, const std::string& source, Reconstruction* reconstruction);
-void ReadCamerasBinary(std::istream& stream, const std::string& source, Reconstruction* reconstruction);
-void ReadImagesBinary(std::istream& stream, const std::string& source, Reconstruction* reconstruction);
-void ReadPoints3DBinary(std::istream& stream, const std::string& source, Reconstruction* reconstruction);
+void ReadCamerasText(std::istream& stream, const std::string& source,
+                     Reconstruction* reconstruction);
+void ReadImagesText(std::istream& stream, const std::string& source,
+                    Reconstruction* reconstruction);
+void ReadPoints3DText(std::istream& stream, const std::string& source,
+                      Reconstruction* reconstruction);
+void ReadCamerasBinary(std::istream& stream, const std::string& source,
+                       Reconstruction* reconstruction);
+void ReadImagesBinary(std::istream& stream, const std::string& source,
+                      Reconstruction* reconstruction);
+void ReadPoints3DBinary(std::istream& stream, const std::string& source,
+                        Reconstruction* reconstruction);
 
 // Writes the three .txt files or the three .bin files into `dir` (created if missing).
-void WriteReconstructionText(const Reconstruction& reconstruction, const std::filesystem::path& dir);
-void WriteReconstructionBinary(const Reconstruction& reconstruction, const std::filesystem::path& dir);
+void WriteReconstructionText(const Reconstruction& reconstruction,
+                             const std::filesystem::path& dir);
+void WriteReconstructionBinary(const Reconstruction& reconstruction,
+                               const std::filesystem::path& dir);
 // Reads a model folder, binary if cameras.bin exists, else text.
 Reconstruction ReadReconstruction(const std::filesystem::path& dir);
 

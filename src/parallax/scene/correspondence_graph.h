@@ -23,10 +23,10 @@ inline constexpr track_t kInvalidTrackId = UINT32_MAX;
 class CorrespondenceGraph {
  public:
   struct TrackStats {
-    size_t num_tracks = 0;             // Tracks with at least two elements.
-    size_t num_observations = 0;       // Keypoints in a track.
-    size_t num_refused_unions = 0;     // Matches that would have made a track inconsistent.
-    size_t num_split_components = 0;   // Components that would have been inconsistent.
+    size_t num_tracks = 0;            // Tracks with at least two elements.
+    size_t num_observations = 0;      // Keypoints in a track.
+    size_t num_refused_unions = 0;    // Matches that would have made a track inconsistent.
+    size_t num_split_components = 0;  // Components that would have been inconsistent.
     double mean_track_length = 0;
   };
 
@@ -43,7 +43,9 @@ class CorrespondenceGraph {
   size_t NumObservationsForImage(image_t image_id) const;
 
   size_t NumTracks() const { return tracks_.size(); }
-  const std::vector<TrackElement>& TrackElements(track_t track_id) const { return tracks_[track_id]; }
+  const std::vector<TrackElement>& TrackElements(track_t track_id) const {
+    return tracks_[track_id];
+  }
   track_t TrackOf(image_t image_id, point2D_t point2D_idx) const;
   // The tracks of all the image's keypoints in order (kInvalidTrackId where none),
   // NumPoints2D(image_id) of them: one lookup for loops over an image's keypoints.

@@ -456,8 +456,8 @@ Database::Database(const std::filesystem::path& path) : path_(path) {
       if ((sqlite3_errcode(db_) & 0xff) == SQLITE_NOTADB) {
         throw InputError(path.string() + ": not a valid SQLite database (" + message + ")");
       }
-      throw InputError(path.string() + ": cannot read the database: " +
-                       DescribeError(db_, message));
+      throw InputError(path.string() +
+                       ": cannot read the database: " + DescribeError(db_, message));
     }
     // WAL: a killed writer leaves the committed state; the next opener replays the log.
     // synchronous=NORMAL keeps that guarantee for process crashes (not for power loss).
@@ -649,8 +649,8 @@ image_t Database::WriteImageWithFeatures(const std::string& name, camera_t camer
 }
 
 void Database::WriteImageGpsPrior(image_t image_id, const GeodeticPosition& position) {
-  Statement statement(db_, path_,
-                      "UPDATE images SET prior_tx = ?, prior_ty = ?, prior_tz = ? WHERE image_id = ?;");
+  Statement statement(
+      db_, path_, "UPDATE images SET prior_tx = ?, prior_ty = ?, prior_tz = ? WHERE image_id = ?;");
   statement.BindDouble(1, position.latitude);
   statement.BindDouble(2, position.longitude);
   statement.BindDouble(3, position.altitude);
@@ -670,7 +670,8 @@ std::vector<std::pair<image_t, GeodeticPosition>> Database::ReadImageGpsPriors()
   return priors;
 }
 
-void Database::WriteImageFileFingerprint(image_t image_id, const ImageFileFingerprint& fingerprint) {
+void Database::WriteImageFileFingerprint(image_t image_id,
+                                         const ImageFileFingerprint& fingerprint) {
   Statement statement(db_, path_,
                       "INSERT OR REPLACE INTO parallax_image_files(image_id, size, mtime_ns, "
                       "content_hash) VALUES(?, ?, ?, ?);");

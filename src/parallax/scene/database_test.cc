@@ -2,11 +2,11 @@
 
 #include <gtest/gtest.h>
 
-#include "parallax/util/eigen_matchers.h"
 #include <signal.h>
 #include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "parallax/util/eigen_matchers.h"
 
 #include <Eigen/LU>
 #include <cstring>
@@ -29,9 +29,7 @@ namespace fs = std::filesystem;
 // A fresh database path in a per-test temporary folder.
 class DatabaseTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    path_ = dir_ / "database.db";
-  }
+  void SetUp() override { path_ = dir_ / "database.db"; }
 
   const test::ScopedTestDir scoped_dir_{"parallax_database_test"};
   const fs::path dir_ = scoped_dir_.path();
@@ -234,15 +232,15 @@ TEST_F(DatabaseTest, FeaturesRoundTrip) {
 
 TEST_F(DatabaseTest, FingerprintsRoundTripAndGoWithTheirImage) {
   Database database(path_);
-  const camera_t shared = database.WriteCamera(
-      Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
-  const camera_t own = database.WriteCamera(
-      Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 600, 64, 48));
+  const camera_t shared =
+      database.WriteCamera(Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
+  const camera_t own =
+      database.WriteCamera(Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 600, 64, 48));
   const ImageFileFingerprint fingerprint{12345, 1700000000123456789, "00ff"};
   const image_t a = database.WriteImageWithFeatures("a.png", shared, RandomKeypoints(5),
                                                     RandomDescriptors(5), fingerprint);
-  const image_t b = database.WriteImageWithFeatures("b.png", shared, RandomKeypoints(5),
-                                                    RandomDescriptors(5));
+  const image_t b =
+      database.WriteImageWithFeatures("b.png", shared, RandomKeypoints(5), RandomDescriptors(5));
   const image_t c = database.WriteImageWithFeatures("c.png", own, RandomKeypoints(5),
                                                     RandomDescriptors(5), fingerprint);
   const auto read = database.ReadImageFileFingerprint(a);
@@ -473,9 +471,9 @@ TEST_F(DatabaseTest, ColmapCompatibleLayout) {
     tables.push_back(row[0]);
   }
   // COLMAP's six, and Parallax's own table of image file fingerprints, which COLMAP ignores.
-  EXPECT_EQ(tables, (std::vector<std::string>{"cameras", "descriptors", "images", "keypoints",
-                                              "matches", "parallax_image_files",
-                                              "two_view_geometries"}));
+  EXPECT_EQ(tables,
+            (std::vector<std::string>{"cameras", "descriptors", "images", "keypoints", "matches",
+                                      "parallax_image_files", "two_view_geometries"}));
   for (const auto& [table, columns] : expected) {
     std::vector<Column> actual;
     for (const auto& row : raw.Query("PRAGMA table_info(" + table + ");")) {

@@ -34,7 +34,9 @@ Image& Reconstruction::GetImage(image_t image_id) {
   return const_cast<Image&>(static_cast<const Reconstruction*>(this)->GetImage(image_id));
 }
 Reconstruction::Reconstruction(const Reconstruction& other)
-    : cameras_(other.cameras_), images_(other.images_), points3D_(other.points3D_),
+    : cameras_(other.cameras_),
+      images_(other.images_),
+      points3D_(other.points3D_),
       next_point3D_id_(other.next_point3D_id_) {
   IndexPoints3DBelow(other.point_index_.size());
 }
@@ -123,8 +125,9 @@ point3D_t Reconstruction::AddPoint3D(const Eigen::Vector3d& xyz, Track track,
 void Reconstruction::AddPoint3DWithId(point3D_t point3D_id, Point3D point) {
   PARALLAX_CHECK(!ExistsPoint3D(point3D_id));
   for (const TrackElement& element : point.track.elements) {
-    PARALLAX_CHECK_MSG(ExistsImage(element.image_id),
-                       "3D point " << point3D_id << " observed in missing image " << element.image_id);
+    PARALLAX_CHECK_MSG(ExistsImage(element.image_id), "3D point " << point3D_id
+                                                                  << " observed in missing image "
+                                                                  << element.image_id);
     Image& image = GetImage(element.image_id);
     PARALLAX_CHECK_MSG(element.point2D_idx < image.points2D.size(),
                        "3D point " << point3D_id << " refers to missing keypoint "
@@ -245,7 +248,8 @@ double Reconstruction::ReprojectionError(image_t image_id, point2D_t point2D_idx
   if (point_in_cam.z() <= std::numeric_limits<double>::epsilon()) {
     return std::numeric_limits<double>::infinity();
   }
-  return (GetCamera(image.camera_id).ImgFromCam(point_in_cam) - image.points2D[point2D_idx].xy).norm();
+  return (GetCamera(image.camera_id).ImgFromCam(point_in_cam) - image.points2D[point2D_idx].xy)
+      .norm();
 }
 
 double Reconstruction::UpdatePointErrors() {

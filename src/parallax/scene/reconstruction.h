@@ -45,8 +45,9 @@ class Reconstruction {
   // The image's points2D must not reference 3D points yet.
   void AddImage(Image image);
   // Adds a point and links every track element to it. Returns the new id.
-  point3D_t AddPoint3D(const Eigen::Vector3d& xyz, Track track,
-                       const Eigen::Matrix<uint8_t, 3, 1>& color = Eigen::Matrix<uint8_t, 3, 1>::Zero());
+  point3D_t AddPoint3D(
+      const Eigen::Vector3d& xyz, Track track,
+      const Eigen::Matrix<uint8_t, 3, 1>& color = Eigen::Matrix<uint8_t, 3, 1>::Zero());
   // Adds the preset id (for reading models); the next generated id is kept above it.
   void AddPoint3DWithId(point3D_t point3D_id, Point3D point);
   void AddObservation(point3D_t point3D_id, const TrackElement& element);
@@ -74,7 +75,8 @@ class Reconstruction {
   double ReprojectionError(image_t image_id, point2D_t point2D_idx) const;
   // The same for any world point `xyz` seen in that keypoint (a candidate position while
   // triangulating, or a point being tested against a new view).
-  double ReprojectionError(image_t image_id, point2D_t point2D_idx, const Eigen::Vector3d& xyz) const;
+  double ReprojectionError(image_t image_id, point2D_t point2D_idx,
+                           const Eigen::Vector3d& xyz) const;
   // Recomputes Point3D::error for every point; returns the mean over all observations.
   double UpdatePointErrors();
   // Mean reprojection error over all observations of one image (0 with none).

@@ -147,8 +147,9 @@ TEST(Reconstruction, ReprojectionErrorAndTransform) {
   track.AddElement(2, 0);
   reconstruction.AddPoint3D(xyz, track);
   EXPECT_NEAR(reconstruction.UpdatePointErrors(), 5.0, 1e-9);
-  reconstruction.Transform(Sim3d(3.0, Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY())),
-                                 Eigen::Vector3d(1, 2, 3)));
+  reconstruction.Transform(
+      Sim3d(3.0, Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY())),
+            Eigen::Vector3d(1, 2, 3)));
   EXPECT_NEAR(reconstruction.UpdatePointErrors(), 5.0, 1e-9);
 }
 

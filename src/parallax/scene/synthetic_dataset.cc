@@ -28,9 +28,7 @@ class Sampler {
   double Gaussian(double stddev) {
     return stddev > 0 ? std::normal_distribution<double>(0.0, stddev)(engine_) : 0.0;
   }
-  size_t Index(size_t size) {
-    return std::uniform_int_distribution<size_t>(0, size - 1)(engine_);
-  }
+  size_t Index(size_t size) { return std::uniform_int_distribution<size_t>(0, size - 1)(engine_); }
   template <typename T>
   void Shuffle(std::vector<T>* elements) {
     std::shuffle(elements->begin(), elements->end(), engine_);
@@ -94,7 +92,8 @@ std::vector<Rigid3d> MakeCameraPoses(const SyntheticDatasetOptions& options, Sam
 Eigen::Vector3d SamplePoint(const SyntheticDatasetOptions& options, Sampler* sampler) {
   const double r = options.scene_radius;
   if (options.layout != SyntheticDatasetOptions::Layout::kSequence) {
-    return Eigen::Vector3d(sampler->Uniform(-r, r), sampler->Uniform(-r, r), sampler->Uniform(-r, r));
+    return Eigen::Vector3d(sampler->Uniform(-r, r), sampler->Uniform(-r, r),
+                           sampler->Uniform(-r, r));
   }
   // A slab along the path, wide and tall enough to fill the views.
   const double half_length = 0.5 * (options.num_images - 1) * options.sequence_step;
@@ -114,9 +113,11 @@ Eigen::VectorXd RandomDescriptor(Sampler* sampler) {
   return descriptor * (512.0 / descriptor.norm());
 }
 
-void StoreDescriptor(const Eigen::VectorXd& descriptor, FeatureDescriptors* descriptors, size_t row) {
+void StoreDescriptor(const Eigen::VectorXd& descriptor, FeatureDescriptors* descriptors,
+                     size_t row) {
   for (int i = 0; i < 128; ++i) {
-    (*descriptors)(row, i) = static_cast<uint8_t>(std::clamp(std::round(descriptor(i)), 0.0, 255.0));
+    (*descriptors)(row, i) =
+        static_cast<uint8_t>(std::clamp(std::round(descriptor(i)), 0.0, 255.0));
   }
 }
 
@@ -161,9 +162,9 @@ void SynthesizeDataset(const SyntheticDatasetOptions& options, Reconstruction* t
 
   std::vector<Camera> cameras;
   for (int k = 0; k < options.num_cameras; ++k) {
-    Camera camera = Camera::Create(static_cast<camera_t>(k + 1), options.camera_model_id,
-                                   options.focal_length * (1.0 + 0.05 * k), options.width,
-                                   options.height);
+    Camera camera =
+        Camera::Create(static_cast<camera_t>(k + 1), options.camera_model_id,
+                       options.focal_length * (1.0 + 0.05 * k), options.width, options.height);
     const std::vector<int> extra_idxs = CameraModelExtraIdxs(options.camera_model_id);
     if (!extra_idxs.empty()) camera.params[extra_idxs[0]] = options.distortion;
     camera.has_prior_focal_length = true;
@@ -180,7 +181,8 @@ void SynthesizeDataset(const SyntheticDatasetOptions& options, Reconstruction* t
   std::vector<Eigen::Vector3d> points;
   const int max_attempts = 100 * options.num_points3D + 1000;
   std::vector<std::pair<int, Eigen::Vector2d>> visible;
-  for (int attempt = 0; attempt < max_attempts && static_cast<int>(points.size()) < options.num_points3D;
+  for (int attempt = 0;
+       attempt < max_attempts && static_cast<int>(points.size()) < options.num_points3D;
        ++attempt) {
     const Eigen::Vector3d xyz = SamplePoint(options, &sampler);
     visible.clear();
@@ -211,8 +213,8 @@ void SynthesizeDataset(const SyntheticDatasetOptions& options, Reconstruction* t
     const int num_outliers =
         static_cast<int>(std::lround(options.outlier_ratio * image_observations.size()));
     for (int k = 0; k < num_outliers; ++k) {
-      image_observations.push_back(
-          {-1, Eigen::Vector2d(sampler.Uniform(0.0, options.width), sampler.Uniform(0.0, options.height))});
+      image_observations.push_back({-1, Eigen::Vector2d(sampler.Uniform(0.0, options.width),
+                                                        sampler.Uniform(0.0, options.height))});
     }
     sampler.Shuffle(&image_observations);
 
@@ -227,7 +229,8 @@ void SynthesizeDataset(const SyntheticDatasetOptions& options, Reconstruction* t
     for (size_t k = 0; k < image_observations.size(); ++k) {
       image.points2D[k].xy = image_observations[k].xy;
       if (image_observations[k].point_idx >= 0) {
-        tracks[image_observations[k].point_idx].AddElement(image.image_id, static_cast<point2D_t>(k));
+        tracks[image_observations[k].point_idx].AddElement(image.image_id,
+                                                           static_cast<point2D_t>(k));
       }
     }
     if (i < options.num_cameras) truth->AddCamera(cameras[i]);
@@ -270,13 +273,15 @@ void WriteSyntheticDatabase(const Reconstruction& truth, Database* database,
     FeatureDescriptors descriptors(image.points2D.size(), 128);
     for (size_t k = 0; k < image.points2D.size(); ++k) {
       const Point2D& point2D = image.points2D[k];
-      keypoints.emplace_back(static_cast<float>(point2D.xy.x()), static_cast<float>(point2D.xy.y()),
-                             static_cast<float>(sampler.Uniform(1.5, 6.0)),
-                             static_cast<float>(sampler.Uniform(-std::numbers::pi, std::numbers::pi)));
+      keypoints.emplace_back(
+          static_cast<float>(point2D.xy.x()), static_cast<float>(point2D.xy.y()),
+          static_cast<float>(sampler.Uniform(1.5, 6.0)),
+          static_cast<float>(sampler.Uniform(-std::numbers::pi, std::numbers::pi)));
       Eigen::VectorXd descriptor;
       if (point2D.HasPoint3D()) {
         descriptor = point_descriptors.at(point2D.point3D_id);
-        for (int i = 0; i < 128; ++i) descriptor(i) += sampler.Gaussian(options.descriptor_noise_stddev);
+        for (int i = 0; i < 128; ++i)
+          descriptor(i) += sampler.Gaussian(options.descriptor_noise_stddev);
       } else {
         descriptor = RandomDescriptor(&sampler);
       }

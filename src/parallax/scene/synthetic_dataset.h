@@ -87,8 +87,8 @@ struct SyntheticDatabaseOptions {
 // per observation, so that a descriptor matcher recovers the true matches; random ones for
 // outlier keypoints), the true matches of every pair of images that share points, and a
 // calibrated two-view geometry per such pair: inliers = the true matches, E and F from the
-// true relative pose, cam2_from_cam1 with unit baseline, triangulation_angle the median triangulation
-// angle. Meant for an empty database, where image ids equal the truth's ids.
+// true relative pose, cam2_from_cam1 with unit baseline, triangulation_angle the median
+// triangulation angle. Meant for an empty database, where image ids equal the truth's ids.
 void WriteSyntheticDatabase(const Reconstruction& truth, Database* database,
                             const SyntheticDatabaseOptions& options = {});
 

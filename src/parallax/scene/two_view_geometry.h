@@ -13,10 +13,10 @@ struct TwoViewGeometry {
   enum Config : int {
     kUndefined = 0,
     kDegenerate = 1,
-    kCalibrated = 2,        // E explains the matches (known intrinsics), enough parallax.
-    kUncalibrated = 3,      // F explains the matches.
-    kPlanar = 4,            // H explains them as well: a planar scene.
-    kPanoramic = 5,         // H and no baseline: pure rotation.
+    kCalibrated = 2,    // E explains the matches (known intrinsics), enough parallax.
+    kUncalibrated = 3,  // F explains the matches.
+    kPlanar = 4,        // H explains them as well: a planar scene.
+    kPanoramic = 5,     // H and no baseline: pure rotation.
     kPlanarOrPanoramic = 6,
     kWatermark = 7,
     kMultiple = 8,

@@ -44,8 +44,8 @@ std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
   Timer timer;
 
   // 1. Map every cluster on its own.
-  const int num_workers =
-      std::max(1, std::min(EffectiveNumThreads(options_.num_threads), static_cast<int>(clusters.size())));
+  const int num_workers = std::max(
+      1, std::min(EffectiveNumThreads(options_.num_threads), static_cast<int>(clusters.size())));
   IncrementalMapperOptions cluster_options = mapper_options_;
   for (BundleAdjustmentOptions* ba : cluster_options.BundleAdjustments()) {
     ba->num_threads = std::max(1, EffectiveNumThreads(ba->num_threads) / num_workers);
@@ -61,7 +61,8 @@ std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
     const ImageCluster cluster = MakeImageCluster(input_, clusters[index]);
     const MapperInput part = ClusterMapperInput(input_, cluster, "cluster");
     IncrementalMapperOptions options = cluster_options;
-    options.absolute_pose.ransac.random_seed = DeriveSeed(cluster_options.absolute_pose.ransac.random_seed, index);
+    options.absolute_pose.ransac.random_seed =
+        DeriveSeed(cluster_options.absolute_pose.ransac.random_seed, index);
     IncrementalMapper mapper(options, part);
     mapper.SetProgress(&progress);
     MapperSummary cluster_summary;

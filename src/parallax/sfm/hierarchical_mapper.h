@@ -22,7 +22,7 @@ struct HierarchicalMapperOptions {
 struct ClusterReport {
   size_t num_images = 0;
   size_t num_pairs = 0;
-  std::vector<size_t> model_sizes;  // Registered images of each model it gave, largest first.
+  std::vector<size_t> model_sizes;       // Registered images of each model it gave, largest first.
   std::vector<ModelMergeReport> merges;  // One per model, in the same order.
   double seconds = 0;
 };

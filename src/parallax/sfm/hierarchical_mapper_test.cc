@@ -35,7 +35,9 @@ double SceneExtent(const Reconstruction& truth) {
   double extent = 0;
   for (const image_t a : truth.RegImageIds()) {
     for (const image_t b : truth.RegImageIds()) {
-      extent = std::max(extent, (truth.GetImage(a).ProjectionCenter() - truth.GetImage(b).ProjectionCenter()).norm());
+      extent = std::max(
+          extent,
+          (truth.GetImage(a).ProjectionCenter() - truth.GetImage(b).ProjectionCenter()).norm());
     }
   }
   return extent;
@@ -75,7 +77,8 @@ TEST(HierarchicalMapper, PartitionedMappingRecoversThePoses) {
     ASSERT_EQ(report.merges.size(), report.model_sizes.size());
     EXPECT_TRUE(report.merges[0].success) << "cluster " << c;
   }
-  for (const auto& [image_id, image_report] : summary.images) EXPECT_EQ(image_report.model_index, 0);
+  for (const auto& [image_id, image_report] : summary.images)
+    EXPECT_EQ(image_report.model_index, 0);
   Reconstruction copy = models[0];
   EXPECT_LT(copy.UpdatePointErrors(), 1.0);
   const PoseErrors errors = CompareToTruth(models[0], truth);

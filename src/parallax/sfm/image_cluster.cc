@@ -15,7 +15,8 @@ void WriteImageCluster(const ImageCluster& cluster, const std::filesystem::path&
     stream << "# Parallax image cluster: " << cluster.image_names.size() << " images, "
            << cluster.pairs.size() << " pairs\n";
     for (const std::string& name : cluster.image_names) stream << "image " << name << "\n";
-    for (const auto& [name1, name2] : cluster.pairs) stream << "pair " << name1 << "\t" << name2 << "\n";
+    for (const auto& [name1, name2] : cluster.pairs)
+      stream << "pair " << name1 << "\t" << name2 << "\n";
   });
 }
 
@@ -41,7 +42,8 @@ ImageCluster ReadImageCluster(const std::filesystem::path& path) {
       if (tab == std::string::npos) fail("pair needs two image names separated by a tab");
       const std::string name1 = Trim(rest.substr(0, tab));
       const std::string name2 = Trim(rest.substr(tab + 1));
-      if (name1.empty() || name2.empty() || name1 == name2) fail("pair needs two different image names");
+      if (name1.empty() || name2.empty() || name1 == name2)
+        fail("pair needs two different image names");
       cluster.pairs.emplace_back(name1, name2);
     } else {
       fail("expected 'image NAME' or 'pair NAME1<TAB>NAME2', got '" + line + "'");
@@ -51,7 +53,8 @@ ImageCluster ReadImageCluster(const std::filesystem::path& path) {
   for (const auto& [name1, name2] : cluster.pairs) {
     for (const std::string& name : {name1, name2}) {
       if (!names.count(name)) {
-        throw InputError(path.string() + ": pair image '" + name + "' is not among the cluster's images");
+        throw InputError(path.string() + ": pair image '" + name +
+                         "' is not among the cluster's images");
       }
     }
   }
@@ -61,7 +64,8 @@ ImageCluster ReadImageCluster(const std::filesystem::path& path) {
 ImageCluster MakeImageCluster(const MapperInput& input, const std::vector<image_t>& image_ids) {
   ImageCluster cluster;
   const std::set<image_t> members(image_ids.begin(), image_ids.end());
-  for (const image_t image_id : members) cluster.image_names.push_back(input.images.at(image_id).name);
+  for (const image_t image_id : members)
+    cluster.image_names.push_back(input.images.at(image_id).name);
   for (const auto& [pair_id, geometry] : input.two_view_geometries) {
     const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
     if (members.count(image_id1) && members.count(image_id2)) {
@@ -77,7 +81,8 @@ MapperInput ClusterMapperInput(const MapperInput& input, const ImageCluster& clu
   for (const auto& [image_id, image] : input.images) id_of_name.emplace(image.name, image_id);
   const auto find_id = [&](const std::string& name) {
     const auto it = id_of_name.find(name);
-    if (it == id_of_name.end()) throw InputError(source + ": image '" + name + "' is not in the database");
+    if (it == id_of_name.end())
+      throw InputError(source + ": image '" + name + "' is not in the database");
     return it->second;
   };
   MapperInput part;
@@ -93,7 +98,8 @@ MapperInput ClusterMapperInput(const MapperInput& input, const ImageCluster& clu
     const image_pair_t pair_id = ImagePairToPairId(image_id1, image_id2);
     const auto it = input.two_view_geometries.find(pair_id);
     if (it == input.two_view_geometries.end()) {
-      throw InputError(source + ": pair '" + name1 + "' - '" + name2 + "' has no verified geometry in the database");
+      throw InputError(source + ": pair '" + name1 + "' - '" + name2 +
+                       "' has no verified geometry in the database");
     }
     part.two_view_geometries.emplace(pair_id, it->second);
   }

@@ -12,8 +12,8 @@
 namespace parallax {
 namespace {
 
-using ::testing::HasSubstr;
 using test::ScopedTestDir;
+using ::testing::HasSubstr;
 
 MapperInput RingInput() {
   SyntheticDatasetOptions options;
@@ -38,7 +38,8 @@ TEST(ImageCluster, FileRoundTripAndClusterInput) {
   const ScopedTestDir dir("image_cluster");
   const MapperInput input = RingInput();
   const ImageCluster cluster = MakeImageCluster(input, {2, 3, 5});
-  EXPECT_EQ(cluster.image_names, (std::vector<std::string>{"image0002.png", "image0003.png", "image0005.png"}));
+  EXPECT_EQ(cluster.image_names,
+            (std::vector<std::string>{"image0002.png", "image0003.png", "image0005.png"}));
   ASSERT_EQ(cluster.pairs.size(), 3u);  // Every pair of the ring's images is verified.
   const auto path = dir.path() / "cluster-0.txt";
   WriteImageCluster(cluster, path);
@@ -79,12 +80,17 @@ TEST(ImageCluster, BadFilesGetOneLineErrorsNamingThem) {
     WriteTextFileAtomically(path, content);
     return ErrorOf([&] { ReadImageCluster(path); });
   };
-  EXPECT_THAT(error_for("image a.jpg\nphoto b.jpg\n"), HasSubstr(path.string() + ": line 2: expected"));
-  EXPECT_THAT(error_for("image a.jpg\nimage a.jpg\n"), HasSubstr("line 2: image 'a.jpg' listed twice"));
-  EXPECT_THAT(error_for("image a.jpg\nimage b.jpg\npair a.jpg b.jpg\n"), HasSubstr("line 3: pair needs two image names"));
-  EXPECT_THAT(error_for("image a.jpg\npair a.jpg\tc.jpg\n"), HasSubstr("'c.jpg' is not among the cluster's images"));
+  EXPECT_THAT(error_for("image a.jpg\nphoto b.jpg\n"),
+              HasSubstr(path.string() + ": line 2: expected"));
+  EXPECT_THAT(error_for("image a.jpg\nimage a.jpg\n"),
+              HasSubstr("line 2: image 'a.jpg' listed twice"));
+  EXPECT_THAT(error_for("image a.jpg\nimage b.jpg\npair a.jpg b.jpg\n"),
+              HasSubstr("line 3: pair needs two image names"));
+  EXPECT_THAT(error_for("image a.jpg\npair a.jpg\tc.jpg\n"),
+              HasSubstr("'c.jpg' is not among the cluster's images"));
   EXPECT_THAT(error_for("# nothing\n"), HasSubstr(path.string() + ": no images"));
-  EXPECT_THAT(ErrorOf([&] { ReadImageCluster(dir.path() / "missing.txt"); }), HasSubstr("missing.txt"));
+  EXPECT_THAT(ErrorOf([&] { ReadImageCluster(dir.path() / "missing.txt"); }),
+              HasSubstr("missing.txt"));
   EXPECT_EQ(error_for("image a.jpg\nphoto b.jpg\n").find('\n'), std::string::npos);
 }
 

@@ -66,8 +66,12 @@ class IncrementalMapper::ModelBuilder {
   ModelBuilder(const IncrementalMapperOptions& options, const MapperInput& input,
                const std::set<image_t>& used_images, MapperSummary* summary,
                ProgressReporter* progress)
-      : options_(options), input_(input), used_images_(used_images), summary_(summary),
-        progress_(progress), model_(input.correspondence_graph, &reconstruction_) {
+      : options_(options),
+        input_(input),
+        used_images_(used_images),
+        summary_(summary),
+        progress_(progress),
+        model_(input.correspondence_graph, &reconstruction_) {
     for (const auto& [camera_id, camera] : input.cameras) reconstruction_.AddCamera(camera);
     for (const auto& [image_id, image] : input.images) reconstruction_.AddImage(image);
   }
@@ -82,7 +86,8 @@ class IncrementalMapper::ModelBuilder {
       const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
       if (used_images_.count(image_id1) || used_images_.count(image_id2)) continue;
       if (geometry.config == TwoViewGeometry::kPanoramic) continue;
-      if (static_cast<int>(geometry.inlier_matches.size()) < options_.init_min_num_inliers) continue;
+      if (static_cast<int>(geometry.inlier_matches.size()) < options_.init_min_num_inliers)
+        continue;
       candidates.emplace_back(pair_id, &geometry);
     }
     std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
@@ -205,9 +210,11 @@ class IncrementalMapper::ModelBuilder {
       const auto xyz = TriangulatePoint(proj1, proj2, points1[i], points2[i]);
       if (!xyz || xyz->z() <= 0 || (cam2_from_cam1 * *xyz).z() <= 0) continue;
       const FeatureMatch& match = geometry.inlier_matches[i];
-      const double error1 = (camera1.ImgFromCam(*xyz) - image1.points2D[match.point2D_idx1].xy).norm();
+      const double error1 =
+          (camera1.ImgFromCam(*xyz) - image1.points2D[match.point2D_idx1].xy).norm();
       const double error2 =
-          (camera2.ImgFromCam(cam2_from_cam1 * *xyz) - image2.points2D[match.point2D_idx2].xy).norm();
+          (camera2.ImgFromCam(cam2_from_cam1 * *xyz) - image2.points2D[match.point2D_idx2].xy)
+              .norm();
       if (error1 > max_error || error2 > max_error) continue;
       angles.push_back(CalculateTriangulationAngle(Eigen::Vector3d::Zero(), center2, *xyz));
     }
@@ -220,7 +227,8 @@ class IncrementalMapper::ModelBuilder {
     const double median_angle_deg = angles[angles.size() / 2] * 180.0 / M_PI;
     if (median_angle_deg < min_angle_deg) {
       PARALLAX_LOG(Debug) << "mapper: initial pair " << image1.name << " + " << image2.name
-                          << ": median angle " << median_angle_deg << " deg, below " << min_angle_deg;
+                          << ": median angle " << median_angle_deg << " deg, below "
+                          << min_angle_deg;
       return false;
     }
 
@@ -301,9 +309,9 @@ class IncrementalMapper::ModelBuilder {
     // One seed per image (and attempt), derived from the mapper's: the same run registers the
     // same way whatever came before.
     AbsolutePoseEstimationOptions pose_options = options_.absolute_pose;
-    pose_options.ransac.random_seed =
-        DeriveSeed(options_.absolute_pose.ransac.random_seed,
-                   (static_cast<uint64_t>(image_id) << 8) | (report->num_registration_trials & 0xff));
+    pose_options.ransac.random_seed = DeriveSeed(
+        options_.absolute_pose.ransac.random_seed,
+        (static_cast<uint64_t>(image_id) << 8) | (report->num_registration_trials & 0xff));
     const AbsolutePoseReport pose = EstimateAbsolutePose(camera, points2D, points3D, pose_options);
     report->num_pnp_inliers = pose.num_inliers;
     const double inlier_ratio = static_cast<double>(pose.num_inliers) / points2D.size();
@@ -329,8 +337,8 @@ class IncrementalMapper::ModelBuilder {
       if (!pose.inlier_mask[i]) continue;
       const auto [point2D_idx, point3D_id] = links[i];
       if (!reconstruction_.ExistsPoint3D(point3D_id)) continue;
-      const double error = reconstruction_.ReprojectionError(image_id, point2D_idx,
-                                            reconstruction_.GetPoint3D(point3D_id).xyz);
+      const double error = reconstruction_.ReprojectionError(
+          image_id, point2D_idx, reconstruction_.GetPoint3D(point3D_id).xyz);
       if (error <= options_.triangulation.max_reprojection_error_px) {
         reconstruction_.AddObservation(point3D_id, {image_id, point2D_idx});
         ++num_added;
@@ -338,8 +346,8 @@ class IncrementalMapper::ModelBuilder {
     }
     if (num_added < min_inliers / 2) {
       reconstruction_.DeRegisterImage(image_id);
-      report->reason = "pose rejected: only " + std::to_string(num_added) +
-                       " observations fit after refinement";
+      report->reason =
+          "pose rejected: only " + std::to_string(num_added) + " observations fit after refinement";
       return false;
     }
     TriangulateImage(options_.triangulation, image_id, &model_);
@@ -347,17 +355,16 @@ class IncrementalMapper::ModelBuilder {
     report->reason.clear();
     report->error_before_ba_px = reconstruction_.MeanReprojectionErrorOfImage(image_id);
     PARALLAX_LOG(Debug) << "mapper: registered " << image.name << " (" << pose.num_inliers << "/"
-                        << points2D.size() << " PnP inliers, "
-                        << reconstruction_.NumRegImages() << " images, "
-                        << reconstruction_.NumPoints3D() << " points)";
+                        << points2D.size() << " PnP inliers, " << reconstruction_.NumRegImages()
+                        << " images, " << reconstruction_.NumPoints3D() << " points)";
     return true;
   }
 
   void AdjustAfterRegistration(image_t image_id) {
-    const bool grown =
-        reconstruction_.NumRegImages() >=
-            options_.global_ba_images_ratio * images_at_last_global_ba_ ||
-        reconstruction_.NumPoints3D() >= options_.global_ba_points_ratio * points_at_last_global_ba_;
+    const bool grown = reconstruction_.NumRegImages() >=
+                           options_.global_ba_images_ratio * images_at_last_global_ba_ ||
+                       reconstruction_.NumPoints3D() >=
+                           options_.global_ba_points_ratio * points_at_last_global_ba_;
     if (grown) {
       GlobalBundleAdjust();
     } else {
@@ -390,7 +397,8 @@ class IncrementalMapper::ModelBuilder {
     for (const Point2D& point2D : image.points2D) {
       if (!point2D.HasPoint3D()) continue;
       point3D_ids.push_back(point2D.point3D_id);
-      for (const TrackElement& element : reconstruction_.GetPoint3D(point2D.point3D_id).track.elements) {
+      for (const TrackElement& element :
+           reconstruction_.GetPoint3D(point2D.point3D_id).track.elements) {
         if (element.image_id != image_id) ++shared[element.image_id];
       }
     }
@@ -400,8 +408,9 @@ class IncrementalMapper::ModelBuilder {
                      [](const auto& a, const auto& b) { return a.first > b.first; });
     BundleAdjustmentConfig config;
     config.AddImage(image_id);
-    for (size_t i = 0; i < ranked.size() && static_cast<int>(config.images.size()) <
-                                                 options_.local_ba_num_images; ++i) {
+    for (size_t i = 0;
+         i < ranked.size() && static_cast<int>(config.images.size()) < options_.local_ba_num_images;
+         ++i) {
       config.AddImage(ranked[i].second);
     }
     if (config.images.size() == reconstruction_.NumRegImages()) FixGauge(&config);
@@ -467,12 +476,13 @@ class IncrementalMapper::ModelBuilder {
 
   std::map<camera_t, std::vector<double>> CameraParams() const {
     std::map<camera_t, std::vector<double>> params;
-    for (const auto& [camera_id, camera] : reconstruction_.Cameras()) params[camera_id] = camera.params;
+    for (const auto& [camera_id, camera] : reconstruction_.Cameras())
+      params[camera_id] = camera.params;
     return params;
   }
 
-  // Refined cameras: principal points within the central 20 % of the image, focal lengths within 0.1-10x the
-  // image size, distortion below 1.
+  // Refined cameras: principal points within the central 20 % of the image, focal lengths within
+  // 0.1-10x the image size, distortion below 1.
   bool IntrinsicsPlausible() const {
     for (const auto& [camera_id, camera] : reconstruction_.Cameras()) {
       if (camera.has_prior_focal_length) continue;  // Held fixed.
@@ -513,10 +523,10 @@ class IncrementalMapper::ModelBuilder {
             ? ", " + std::to_string(ba_summary.num_linear_iterations) + " CG iterations"
             : "";
     PARALLAX_LOG(Debug) << "mapper: BA over " << config.images.size() << " images, "
-                        << ba_summary.num_residuals << " observations: "
-                        << ba_summary.num_iterations << " iterations" << linear_iterations << ", "
-                        << ba_summary.seconds << " s, " << ba_summary.solver << " ("
-                        << ba_summary.termination << ")";
+                        << ba_summary.num_residuals
+                        << " observations: " << ba_summary.num_iterations << " iterations"
+                        << linear_iterations << ", " << ba_summary.seconds << " s, "
+                        << ba_summary.solver << " (" << ba_summary.termination << ")";
   }
 
   const IncrementalMapperOptions& options_;
@@ -598,14 +608,15 @@ std::vector<Reconstruction> IncrementalMapper::Run(const Reconstruction* seed,
       report.reason = "its model had fewer than " + std::to_string(options_.min_model_size) +
                       " images and was discarded";
     } else {
-      report.reason = "never connected to a reconstructed image (matched only with images "
-                      "that were not registered)";
+      report.reason =
+          "never connected to a reconstructed image (matched only with images "
+          "that were not registered)";
     }
   }
   if (models.empty()) {
-    summary->failure =
-        "no initial image pair has enough verified matches (" +
-        std::to_string(options_.init_min_num_inliers) + ") with enough triangulation angle";
+    summary->failure = "no initial image pair has enough verified matches (" +
+                       std::to_string(options_.init_min_num_inliers) +
+                       ") with enough triangulation angle";
   }
   summary->seconds = timer.ElapsedSeconds();
   return models;

@@ -18,15 +18,16 @@ namespace parallax {
 
 struct IncrementalMapperOptions {
   // Initial pair.
-  int init_min_num_inliers = 100;        // Triangulated points the initial pair must give.
-  double init_min_triangulation_angle_deg = 16.0;  // Median triangulation angle of the initial pair.
-  int init_max_trials = 200;             // Candidate pairs examined per angle threshold.
+  int init_min_num_inliers = 100;  // Triangulated points the initial pair must give.
+  double init_min_triangulation_angle_deg =
+      16.0;                   // Median triangulation angle of the initial pair.
+  int init_max_trials = 200;  // Candidate pairs examined per angle threshold.
   // Registration of the next image.
   AbsolutePoseEstimationOptions absolute_pose;
   AbsolutePoseRefinementOptions absolute_pose_refinement;
-  int absolute_pose_min_num_inliers = 30;     // PnP inliers an image needs to be registered.
+  int absolute_pose_min_num_inliers = 30;  // PnP inliers an image needs to be registered.
   double absolute_pose_min_inlier_ratio = 0.25;
-  int max_registration_trials = 2;       // Failed attempts before an image is given up.
+  int max_registration_trials = 2;  // Failed attempts before an image is given up.
   // Triangulation and filtering.
   TrackTriangulationOptions triangulation;
   ObservationFilterOptions filter;
@@ -58,19 +59,21 @@ struct IncrementalMapperOptions {
     return options;
   }();
   // The three, for settings that apply to every adjustment (threads, solver).
-  std::array<BundleAdjustmentOptions*, 3> BundleAdjustments() { return {&local_ba, &global_ba, &final_ba}; }
-  int local_ba_num_images = 6;           // Images optimised around each new image.
-  double global_ba_images_ratio = 1.1;   // Global BA when the model grew by this factor...
-  double global_ba_points_ratio = 1.1;   // ...in images or in points.
-  int global_ba_max_refinements = 3;     // BA + filter + complete rounds of the final BA.
+  std::array<BundleAdjustmentOptions*, 3> BundleAdjustments() {
+    return {&local_ba, &global_ba, &final_ba};
+  }
+  int local_ba_num_images = 6;          // Images optimised around each new image.
+  double global_ba_images_ratio = 1.1;  // Global BA when the model grew by this factor...
+  double global_ba_points_ratio = 1.1;  // ...in images or in points.
+  int global_ba_max_refinements = 3;    // BA + filter + complete rounds of the final BA.
   // The final adjustment also frees the principal point of cameras without a prior when each
   // is seen by at least this many images (0: never), and keeps it only if it stays near the
   // image centre: a centred guess that is off is otherwise absorbed by focal length and
   // distortion (README, "Principal point freed at the end").
   int final_principal_point_min_images = 10;
   // Models.
-  int min_model_size = 3;                // Smaller models are discarded.
-  bool multiple_models = true;           // Start a new model when the current one is stuck.
+  int min_model_size = 3;       // Smaller models are discarded.
+  bool multiple_models = true;  // Start a new model when the current one is stuck.
   int max_num_models = 20;
   void Check() const;
 };

@@ -71,8 +71,9 @@ TEST(IncrementalMapper, ExtendsASeedOfKnownPosesToTheWholeScene) {
   const MapperInput input = InputFromTruth(truth);
   // The seed: the first six images with their true poses in a frame of its own (scaled,
   // turned and moved), and no points.
-  const Sim3d seed_from_truth(2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
-                              Eigen::Vector3d(4, -1, 2));
+  const Sim3d seed_from_truth(
+      2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
+      Eigen::Vector3d(4, -1, 2));
   Reconstruction seed;
   for (const auto& [camera_id, camera] : truth.Cameras()) seed.AddCamera(camera);
   for (image_t image_id = 1; image_id <= 6; ++image_id) {
@@ -92,7 +93,9 @@ TEST(IncrementalMapper, ExtendsASeedOfKnownPosesToTheWholeScene) {
   EXPECT_GE(models[0].NumPoints3D(), 0.9 * truth.NumPoints3D());
   // The seed's frame is kept: its images stay close to where the seed put them.
   for (image_t image_id = 1; image_id <= 6; ++image_id) {
-    EXPECT_LT((models[0].GetImage(image_id).ProjectionCenter() - seed.GetImage(image_id).ProjectionCenter()).norm(),
+    EXPECT_LT((models[0].GetImage(image_id).ProjectionCenter() -
+               seed.GetImage(image_id).ProjectionCenter())
+                  .norm(),
               1e-2 * seed_from_truth.scale * options.camera_distance)
         << image_id;
   }

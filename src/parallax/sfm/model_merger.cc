@@ -107,7 +107,8 @@ ModelMergeReport EstimateMergedFromModel(const ModelMergerOptions& options,
 
 }  // namespace
 
-Reconstruction MergeModels(const ModelMergerOptions& options, const std::vector<Reconstruction>& models,
+Reconstruction MergeModels(const ModelMergerOptions& options,
+                           const std::vector<Reconstruction>& models,
                            std::vector<ModelMergeReport>* reports) {
   options.Check();
   std::vector<ModelMergeReport> merge_reports(models.size());
@@ -158,7 +159,8 @@ Reconstruction MergeModels(const ModelMergerOptions& options, const std::vector<
         best_shared = std::move(shared);
       }
     }
-    if (best == models.size() || static_cast<int>(best_shared.size()) < options.min_shared_images) break;
+    if (best == models.size() || static_cast<int>(best_shared.size()) < options.min_shared_images)
+      break;
     done[best] = true;
     merge_reports[best] = EstimateMergedFromModel(options, models[best], best_shared, observations);
     const ModelMergeReport& report = merge_reports[best];

@@ -40,7 +40,8 @@ struct ModelMergeReport {
 // with their poses; no points, which the caller triangulates anew from all the tracks.
 // `reports` gets one entry per input model (the first is the frame, with success set);
 // models that never share enough with the rest are left out, their report unsuccessful.
-Reconstruction MergeModels(const ModelMergerOptions& options, const std::vector<Reconstruction>& models,
+Reconstruction MergeModels(const ModelMergerOptions& options,
+                           const std::vector<Reconstruction>& models,
                            std::vector<ModelMergeReport>* reports = nullptr);
 
 }  // namespace parallax

@@ -11,7 +11,8 @@
 namespace parallax {
 namespace {
 
-Sim3d MakeSim3(double scale, double angle, const Eigen::Vector3d& axis, const Eigen::Vector3d& translation) {
+Sim3d MakeSim3(double scale, double angle, const Eigen::Vector3d& axis,
+               const Eigen::Vector3d& translation) {
   return Sim3d(scale, Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized())), translation);
 }
 
@@ -93,7 +94,8 @@ TEST(ModelMerger, ModelsThatShareTooLittleAreLeftOut) {
   const Reconstruction truth = SequenceTruth();
   std::vector<Reconstruction> models;
   models.push_back(SubModel(truth, Range(1, 15), Sim3d()));
-  models.push_back(SubModel(truth, Range(14, 20), MakeSim3(2, 0.5, {1, 0, 0}, {0, 1, 0})));  // 2 shared.
+  models.push_back(
+      SubModel(truth, Range(14, 20), MakeSim3(2, 0.5, {1, 0, 0}, {0, 1, 0})));  // 2 shared.
   ModelMergerOptions options;
   options.min_shared_images = 3;
   std::vector<ModelMergeReport> reports;
@@ -113,7 +115,8 @@ TEST(ModelMerger, AModelWhosePointsDisagreeIsNotMerged) {
   std::mt19937 generator(3);
   std::uniform_real_distribution<double> offset(-5, 5);
   for (auto& [point3D_id, point] : scrambled.Points3D()) {
-    scrambled.GetPoint3D(point3D_id).xyz += Eigen::Vector3d(offset(generator), offset(generator), offset(generator));
+    scrambled.GetPoint3D(point3D_id).xyz +=
+        Eigen::Vector3d(offset(generator), offset(generator), offset(generator));
   }
   models.push_back(scrambled);
   std::vector<ModelMergeReport> reports;

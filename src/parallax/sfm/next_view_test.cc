@@ -12,7 +12,8 @@ struct TwoImages {
   Reconstruction model;
 };
 
-void Build(const std::vector<Eigen::Vector2d>& keypoints2, size_t num_triangulated, TwoImages* scene) {
+void Build(const std::vector<Eigen::Vector2d>& keypoints2, size_t num_triangulated,
+           TwoImages* scene) {
   scene->model.AddCamera(Camera::Create(1, CameraModelId::kPinhole, 100, 100, 100));
   FeatureMatches matches;
   for (image_t image_id : {1, 2}) {

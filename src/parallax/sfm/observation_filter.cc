@@ -47,7 +47,8 @@ size_t FilterPoints(const ObservationFilterOptions& options,
     }
     for (size_t a = 0; a < centers.size() && max_angle < min_angle; ++a) {
       for (size_t b = a + 1; b < centers.size() && max_angle < min_angle; ++b) {
-        max_angle = std::max(max_angle, CalculateTriangulationAngle(centers[a], centers[b], kept.xyz));
+        max_angle =
+            std::max(max_angle, CalculateTriangulationAngle(centers[a], centers[b], kept.xyz));
       }
     }
     if (max_angle < min_angle) {

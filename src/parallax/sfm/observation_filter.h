@@ -8,7 +8,8 @@ namespace parallax {
 
 struct ObservationFilterOptions {
   double max_reprojection_error_px = 4.0;  // Observations reprojecting further are removed.
-  double min_triangulation_angle_deg = 1.5;    // Points seen under a smaller largest angle are removed.
+  double min_triangulation_angle_deg =
+      1.5;  // Points seen under a smaller largest angle are removed.
   void Check() const;
 };
 

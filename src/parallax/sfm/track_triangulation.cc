@@ -38,8 +38,8 @@ std::vector<View> CollectViews(track_t track_id, const TrackedReconstruction& mo
     view.element = element;
     view.cam_from_world = image.cam_from_world.ToMatrix();
     view.center = image.ProjectionCenter();
-    view.normalized =
-        reconstruction.GetCamera(image.camera_id).CamFromImg(image.points2D[element.point2D_idx].xy);
+    view.normalized = reconstruction.GetCamera(image.camera_id)
+                          .CamFromImg(image.points2D[element.point2D_idx].xy);
     views.push_back(view);
   }
   return views;
@@ -160,7 +160,8 @@ size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
 
 size_t ContinueOrTriangulateTrack(const TrackTriangulationOptions& options, track_t track_id,
                                   TrackedReconstruction* model) {
-  if (model->PointOfTrack(track_id) != kInvalidPoint3DId) return ContinueTrack(options, track_id, model);
+  if (model->PointOfTrack(track_id) != kInvalidPoint3DId)
+    return ContinueTrack(options, track_id, model);
   const point3D_t point3D_id = TriangulateTrack(options, track_id, model);
   return point3D_id == kInvalidPoint3DId ? 0 : model->Model().GetPoint3D(point3D_id).track.Length();
 }
@@ -172,7 +173,8 @@ size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_
   size_t num_added = 0;
   for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
     const track_t track_id = tracks[idx];
-    if (track_id != kInvalidTrackId) num_added += ContinueOrTriangulateTrack(options, track_id, model);
+    if (track_id != kInvalidTrackId)
+      num_added += ContinueOrTriangulateTrack(options, track_id, model);
   }
   return num_added;
 }

@@ -5,9 +5,9 @@
 namespace parallax {
 
 struct TrackTriangulationOptions {
-  double min_angle_deg = 1.5;       // Smallest triangulation angle a new point needs.
-  double max_reprojection_error_px = 4.0; // Observations further off are not part of the point.
-  int max_pair_trials = 30;         // View pairs tried as hypotheses for long tracks.
+  double min_angle_deg = 1.5;              // Smallest triangulation angle a new point needs.
+  double max_reprojection_error_px = 4.0;  // Observations further off are not part of the point.
+  int max_pair_trials = 30;                // View pairs tried as hypotheses for long tracks.
   void Check() const;
 };
 

@@ -39,7 +39,9 @@ class TrackTriangulationTest : public ::testing::Test {
   // The true point of a track (through its first element's keypoint in the truth).
   Eigen::Vector3d TruePoint(track_t track_id) const {
     const TrackElement& element = input_.correspondence_graph.TrackElements(track_id).front();
-    return truth_.GetPoint3D(truth_.GetImage(element.image_id).points2D[element.point2D_idx].point3D_id).xyz;
+    return truth_
+        .GetPoint3D(truth_.GetImage(element.image_id).points2D[element.point2D_idx].point3D_id)
+        .xyz;
   }
 
   // A track with elements in at least `min_registered` of images 1..4.

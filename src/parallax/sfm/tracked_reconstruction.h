@@ -12,7 +12,8 @@ namespace parallax {
 class TrackedReconstruction {
  public:
   TrackedReconstruction(const CorrespondenceGraph& graph, Reconstruction* reconstruction)
-      : graph_(graph), reconstruction_(reconstruction),
+      : graph_(graph),
+        reconstruction_(reconstruction),
         track_point3D_(graph.NumTracks(), kInvalidPoint3DId) {}
 
   const CorrespondenceGraph& Graph() const { return graph_; }

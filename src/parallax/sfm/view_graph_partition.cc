@@ -154,10 +154,12 @@ std::pair<std::vector<int>, std::vector<int>> Bisect(const WeightedGraph& graph,
                                                      const ViewGraphPartitionOptions& options,
                                                      std::vector<int>* scratch_local) {
   const int n = static_cast<int>(nodes.size());
-  const Eigen::VectorXd fiedler = FiedlerVector(graph, nodes, options.max_lanczos_steps, scratch_local);
+  const Eigen::VectorXd fiedler =
+      FiedlerVector(graph, nodes, options.max_lanczos_steps, scratch_local);
   std::vector<int> order(n);
   for (int i = 0; i < n; ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return fiedler[a] < fiedler[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return fiedler[a] < fiedler[b]; });
 
   std::vector<int>& local = *scratch_local;
   for (int i = 0; i < n; ++i) local[nodes[i]] = i;
@@ -200,7 +202,8 @@ std::pair<std::vector<int>, std::vector<int>> Bisect(const WeightedGraph& graph,
 }
 
 // Adds to every cluster the images of each neighbouring cluster most strongly linked to it.
-void AddOverlap(const WeightedGraph& graph, int overlap_images, std::vector<std::vector<int>>* clusters) {
+void AddOverlap(const WeightedGraph& graph, int overlap_images,
+                std::vector<std::vector<int>>* clusters) {
   std::vector<int> cluster_of(graph.neighbors.size(), -1);
   for (size_t c = 0; c < clusters->size(); ++c) {
     for (const int node : (*clusters)[c]) cluster_of[node] = static_cast<int>(c);
@@ -252,7 +255,8 @@ std::vector<std::vector<image_t>> PartitionViewGraph(const ViewGraphPartitionOpt
     auto [first, second] = Bisect(graph, nodes, options, &scratch);
     // A side of a cut need not be connected: its pieces are split on their own.
     for (std::vector<int>* side : {&first, &second}) {
-      for (std::vector<int>& piece : Components(graph, *side, &scratch)) pending.push_back(std::move(piece));
+      for (std::vector<int>& piece : Components(graph, *side, &scratch))
+        pending.push_back(std::move(piece));
     }
   }
   AddOverlap(graph, options.overlap_images, &leaves);

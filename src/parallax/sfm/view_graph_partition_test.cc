@@ -108,7 +108,8 @@ TEST(ViewGraphPartition, GridSplitsIntoBoundedConnectedClustersWithShortCuts) {
   EXPECT_EQ(cluster_of.size(), 600u);
   // Compact blocks cut about 1 edge in 8 here; slicing in strips or at random cuts far more.
   size_t num_cut = 0;
-  for (const ViewGraphEdge& edge : edges) num_cut += cluster_of[edge.image_id1] != cluster_of[edge.image_id2];
+  for (const ViewGraphEdge& edge : edges)
+    num_cut += cluster_of[edge.image_id1] != cluster_of[edge.image_id2];
   EXPECT_LT(num_cut, 0.15 * edges.size()) << clusters.size() << " clusters";
 }
 
@@ -129,7 +130,8 @@ TEST(ViewGraphPartition, NeighboursLendTheirMostStronglyLinkedImages) {
   AddClique(1, 30, 100, &edges);
   AddClique(101, 30, 100, &edges);
   // Bridges of increasing strength: 103..107 in the second clique, 3..7 in the first.
-  for (int i = 0; i < 5; ++i) edges.push_back({static_cast<image_t>(3 + i), static_cast<image_t>(103 + i), 1.0 + i});
+  for (int i = 0; i < 5; ++i)
+    edges.push_back({static_cast<image_t>(3 + i), static_cast<image_t>(103 + i), 1.0 + i});
   ViewGraphPartitionOptions options;
   options.max_cluster_images = 40;
   options.overlap_images = 3;

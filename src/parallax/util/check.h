@@ -33,27 +33,27 @@ std::string FormatComparison(const A& a, const B& b) {
 
 }  // namespace parallax
 
-#define PARALLAX_CHECK(condition)                                                      \
-  do {                                                                                 \
+#define PARALLAX_CHECK(condition)                                                                \
+  do {                                                                                           \
     if (!(condition)) ::parallax::internal::ThrowCheckError(__FILE__, __LINE__, #condition, ""); \
   } while (false)
 
-#define PARALLAX_CHECK_MSG(condition, message)                                                \
-  do {                                                                                        \
-    if (!(condition)) {                                                                       \
-      std::ostringstream parallax_check_stream_;                                              \
-      parallax_check_stream_ << message;                                                      \
-      ::parallax::internal::ThrowCheckError(__FILE__, __LINE__, #condition,                   \
-                                            parallax_check_stream_.str());                    \
-    }                                                                                         \
+#define PARALLAX_CHECK_MSG(condition, message)                              \
+  do {                                                                      \
+    if (!(condition)) {                                                     \
+      std::ostringstream parallax_check_stream_;                            \
+      parallax_check_stream_ << message;                                    \
+      ::parallax::internal::ThrowCheckError(__FILE__, __LINE__, #condition, \
+                                            parallax_check_stream_.str());  \
+    }                                                                       \
   } while (false)
 
-#define PARALLAX_CHECK_OP(op, a, b)                                                     \
-  do {                                                                                  \
-    if (!((a)op(b))) {                                                                  \
-      ::parallax::internal::ThrowCheckError(__FILE__, __LINE__, #a " " #op " " #b,      \
+#define PARALLAX_CHECK_OP(op, a, b)                                                            \
+  do {                                                                                         \
+    if (!((a)op(b))) {                                                                         \
+      ::parallax::internal::ThrowCheckError(__FILE__, __LINE__, #a " " #op " " #b,             \
                                             ::parallax::internal::FormatComparison((a), (b))); \
-    }                                                                                   \
+    }                                                                                          \
   } while (false)
 
 #define PARALLAX_CHECK_EQ(a, b) PARALLAX_CHECK_OP(==, a, b)

@@ -32,7 +32,7 @@ class LogLine {
 
 }  // namespace parallax
 
-#define PARALLAX_LOG(level)                                                   \
-  if (!::parallax::LogEnabled(::parallax::LogLevel::k##level)) {              \
-  } else                                                                      \
+#define PARALLAX_LOG(level)                                      \
+  if (!::parallax::LogEnabled(::parallax::LogLevel::k##level)) { \
+  } else                                                         \
     ::parallax::internal::LogLine(::parallax::LogLevel::k##level)

@@ -18,8 +18,9 @@ class ScopedTestDir {
  public:
   explicit ScopedTestDir(const std::string& prefix) {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            (prefix + "_" + std::to_string(getpid()) + "_" + (info != nullptr ? info->name() : "suite"));
+    path_ =
+        std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(getpid()) + "_" +
+                                                  (info != nullptr ? info->name() : "suite"));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

@@ -11,6 +11,7 @@ int EffectiveNumThreads(int requested);
 // Runs body(i) for i in [begin, end) on up to num_threads threads with dynamic scheduling
 // (an atomic counter), so uneven work items balance. The first exception thrown by a body is
 // rethrown on the calling thread after all workers stop.
-void ParallelFor(size_t begin, size_t end, int num_threads, const std::function<void(size_t)>& body);
+void ParallelFor(size_t begin, size_t end, int num_threads,
+                 const std::function<void(size_t)>& body);
 
 }  // namespace parallax

@@ -140,9 +140,9 @@ class ReprojectionErrorCostFunction
       Eigen::Matrix3d skew_point;
       skew_point << 0, -point.z(), point.y(), point.z(), 0, -point.x(), -point.y(), point.x(), 0;
       Eigen::Matrix<double, 3, 4> d_cam_d_q;
-      d_cam_d_q.leftCols<3>() = -2.0 * w * skew_point +
-                                2.0 * (v.dot(point) * Eigen::Matrix3d::Identity() +
-                                       v * point.transpose() - 2.0 * point * v.transpose());
+      d_cam_d_q.leftCols<3>() =
+          -2.0 * w * skew_point + 2.0 * (v.dot(point) * Eigen::Matrix3d::Identity() +
+                                         v * point.transpose() - 2.0 * point * v.transpose());
       d_cam_d_q.col(3) = 2.0 * v_cross_x;
       Eigen::Map<Eigen::Matrix<double, 2, 4, Eigen::RowMajor>> d_q(jacobians[0]);
       d_q = d_img_d_cam * d_cam_d_q;

@@ -27,8 +27,8 @@ Observation RandomObservation() {
   obs.rotation = Eigen::Quaterniond(RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0),
                                     RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0))
                      .normalized();
-  obs.translation = Eigen::Vector3d(RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0),
-                                    RandomGaussian(0.0, 1.0));
+  obs.translation =
+      Eigen::Vector3d(RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0));
   const Eigen::Vector3d in_cam(RandomUniformReal(-1.0, 1.0), RandomUniformReal(-1.0, 1.0),
                                RandomUniformReal(2.0, 6.0));
   obs.point = obs.rotation.inverse() * (in_cam - obs.translation);
@@ -140,8 +140,8 @@ TEST(ReprojectionErrorCostFunction, RotationJacobianPredictsChangeOnTheManifold)
     Eigen::Vector3d delta = Eigen::Vector3d::Zero();
     delta[axis] = step;
     Observation moved = obs;
-    ASSERT_TRUE(manifold.Plus(obs.rotation.coeffs().data(), delta.data(),
-                              moved.rotation.coeffs().data()));
+    ASSERT_TRUE(
+        manifold.Plus(obs.rotation.coeffs().data(), delta.data(), moved.rotation.coeffs().data()));
     const Eigen::Vector2d change =
         Evaluate(*cost, moved, {false, false, false, false}).residual - at.residual;
     EXPECT_NEAR((change / step - d_tangent.col(axis)).norm(), 0.0,

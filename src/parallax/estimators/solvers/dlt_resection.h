@@ -3,8 +3,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "parallax/math/eigen_types.h"
 #include "parallax/estimators/solvers/solver_estimator.h"
+#include "parallax/math/eigen_types.h"
 
 namespace parallax {
 
@@ -36,8 +36,7 @@ void ComputeSquaredProjectionErrors(const std::vector<Eigen::Vector2d>& points2D
 
 // RANSAC estimator (optim/ransac.h) for the projection matrix of an uncalibrated camera.
 // X: pixels; Y: world points.
-using DLTResectionEstimator =
-    SolverEstimator<Eigen::Vector2d, Eigen::Vector3d, Matrix3x4d, 6, SolveDLTResection,
-                    ComputeSquaredProjectionErrors>;
+using DLTResectionEstimator = SolverEstimator<Eigen::Vector2d, Eigen::Vector3d, Matrix3x4d, 6,
+                                              SolveDLTResection, ComputeSquaredProjectionErrors>;
 
 }  // namespace parallax

@@ -4,8 +4,8 @@
 #include <vector>
 
 #include "parallax/estimators/solvers/p3p.h"
-#include "parallax/geometry/rigid3.h"
 #include "parallax/estimators/solvers/solver_estimator.h"
+#include "parallax/geometry/rigid3.h"
 
 namespace parallax {
 

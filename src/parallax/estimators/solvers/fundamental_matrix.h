@@ -3,8 +3,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "parallax/geometry/epipolar.h"
 #include "parallax/estimators/solvers/solver_estimator.h"
+#include "parallax/geometry/epipolar.h"
 
 namespace parallax {
 

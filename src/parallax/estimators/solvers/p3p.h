@@ -4,8 +4,8 @@
 #include <array>
 #include <vector>
 
-#include "parallax/geometry/rigid3.h"
 #include "parallax/estimators/solvers/solver_estimator.h"
+#include "parallax/geometry/rigid3.h"
 
 namespace parallax {
 
@@ -40,7 +40,7 @@ void SolveP3PFromFirstThree(const std::vector<Eigen::Vector2d>& points2D,
                             std::vector<Rigid3d>* cams_from_world);
 
 // RANSAC estimator (optim/ransac.h) for calibrated absolute pose from minimal samples.
-using P3PEstimator = SolverEstimator<Eigen::Vector2d, Eigen::Vector3d, Rigid3d, 3, SolveP3PFromFirstThree,
-                                     ComputeSquaredReprojectionErrors>;
+using P3PEstimator = SolverEstimator<Eigen::Vector2d, Eigen::Vector3d, Rigid3d, 3,
+                                     SolveP3PFromFirstThree, ComputeSquaredReprojectionErrors>;
 
 }  // namespace parallax

@@ -18,7 +18,8 @@ struct SolverEstimator {
   using M_t = M;
   static constexpr int kMinNumSamples = MinNumSamples;
 
-  void Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y, std::vector<M_t>* models) const {
+  void Estimate(const std::vector<X_t>& x, const std::vector<Y_t>& y,
+                std::vector<M_t>* models) const {
     Solve(x, y, models);
   }
   void Residuals(const std::vector<X_t>& x, const std::vector<Y_t>& y, const M_t& model,

@@ -36,7 +36,8 @@ inline MapperInput InputFromTruth(const Reconstruction& truth) {
     for (const TrackElement& a : point.track.elements) {
       for (const TrackElement& b : point.track.elements) {
         if (a.image_id < b.image_id) {
-          matches[ImagePairToPairId(a.image_id, b.image_id)].push_back({a.point2D_idx, b.point2D_idx});
+          matches[ImagePairToPairId(a.image_id, b.image_id)].push_back(
+              {a.point2D_idx, b.point2D_idx});
         }
       }
     }
@@ -79,7 +80,8 @@ inline PoseErrors CompareToTruth(const Reconstruction& model, const Reconstructi
   const double model_per_truth = spread(model_centers) / spread(truth_centers);
   const std::vector<image_t> image_ids = model.RegImageIds();
   for (size_t i = 0; i < image_ids.size(); ++i) {
-    model_centers.push_back(model_centers[i] + model_per_truth * model.GetImage(image_ids[i]).ViewingDirection());
+    model_centers.push_back(model_centers[i] +
+                            model_per_truth * model.GetImage(image_ids[i]).ViewingDirection());
     truth_centers.push_back(truth_centers[i] + truth.GetImage(image_ids[i]).ViewingDirection());
   }
   const auto truth_from_model = EstimateSim3d(model_centers, truth_centers);
@@ -87,10 +89,11 @@ inline PoseErrors CompareToTruth(const Reconstruction& model, const Reconstructi
   PoseErrors errors;
   if (!truth_from_model) return errors;
   for (const image_t image_id : model.RegImageIds()) {
-    const Rigid3d aligned = TransformCameraPose(*truth_from_model, model.GetImage(image_id).cam_from_world);
+    const Rigid3d aligned =
+        TransformCameraPose(*truth_from_model, model.GetImage(image_id).cam_from_world);
     const Rigid3d& expected = truth.GetImage(image_id).cam_from_world;
-    errors.max_rotation_deg =
-        std::max(errors.max_rotation_deg, RotationAngleDegrees(aligned.rotation, expected.rotation));
+    errors.max_rotation_deg = std::max(errors.max_rotation_deg,
+                                       RotationAngleDegrees(aligned.rotation, expected.rotation));
     errors.max_center_error = std::max(
         errors.max_center_error, (ProjectionCenter(aligned) - ProjectionCenter(expected)).norm());
   }
