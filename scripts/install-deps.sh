@@ -12,6 +12,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libxxhash-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium
+  clang-format-14
 )
 # Extra packages for optional checks, installed when asked: PARALLAX_EXTRA_DEPS=1.
 if [[ "${PARALLAX_EXTRA_DEPS:-0}" == "1" ]]; then
