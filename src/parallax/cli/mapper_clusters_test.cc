@@ -88,6 +88,25 @@ TEST_F(MapperClustersTest, HierarchicalRunWritesClustersAndMapsEveryImage) {
   }
 }
 
+// --ba-loss reaches the final adjustment only; the log names each adjustment's loss.
+TEST_F(MapperClustersTest, BaLossFlagSetsTheFinalAdjustmentsLoss) {
+  std::vector<std::string> arguments = MapperArguments(dir_ / "huber");
+  arguments.back() = "-v";
+  arguments.push_back("--ba-loss");
+  arguments.push_back("huber");
+  const test::ProcessResult result = test::RunParallax(arguments, dir_, 300);
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  size_t num_huber = 0, num_squared = 0, num_cauchy = 0;
+  for (const std::string& line : test::LinesStartingWith(result.err, "debug: mapper: BA over")) {
+    num_huber += line.find("huber loss") != std::string::npos;
+    num_squared += line.find("squared loss") != std::string::npos;
+    num_cauchy += line.find("cauchy loss") != std::string::npos;
+  }
+  EXPECT_GE(num_huber, 1u);
+  EXPECT_GE(num_squared, 1u);
+  EXPECT_EQ(num_cauchy, 0u);
+}
+
 TEST_F(MapperClustersTest, ClusterFileWithAnUnknownImageIsAOneLineError) {
   const fs::path cluster_file = dir_ / "cluster.txt";
   WriteTextFileAtomically(cluster_file, "image image0001.png\nimage holiday.jpg\n");

@@ -73,6 +73,24 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option("--cluster-overlap", options->hierarchical.partition.overlap_images,
                  "Hierarchical mapper: images a cluster borrows from each neighbouring cluster")
       ->capture_default_str();
+  app.add_option_function<std::string>(
+         "--ba-loss",
+         [&mapper](const std::string& name) {
+           mapper.final_ba.loss_function = LossFunctionTypeFromName(name).value();
+         },
+         "Loss of the final bundle adjustment: cauchy, huber, soft-l1 or squared (local and "
+         "intermediate adjustments use squared)")
+      ->check(CLI::IsMember({"cauchy", "huber", "soft-l1", "squared"}))
+      ->default_str("cauchy");
+  app.add_option_function<double>(
+         "--ba-loss-scale",
+         [&mapper](double scale_px) {
+           for (BundleAdjustmentOptions* ba : mapper.BundleAdjustments())
+             ba->loss_scale_px = scale_px;
+         },
+         "Scale of the robust loss, pixels of reprojection error")
+      ->default_str("1")
+      ->check(CLI::PositiveNumber);
   app.add_flag("!--no-text", options->write_text, "Do not write the .txt model files");
   app.add_flag("!--no-binary", options->write_binary, "Do not write the .bin model files");
 }

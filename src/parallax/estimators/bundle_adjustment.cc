@@ -18,6 +18,28 @@ std::optional<BundleAdjustmentSolver> BundleAdjustmentSolverFromName(const std::
   return std::nullopt;
 }
 
+std::optional<LossFunctionType> LossFunctionTypeFromName(const std::string& name) {
+  if (name == "squared") return LossFunctionType::kTrivial;
+  if (name == "huber") return LossFunctionType::kHuber;
+  if (name == "soft-l1") return LossFunctionType::kSoftLOne;
+  if (name == "cauchy") return LossFunctionType::kCauchy;
+  return std::nullopt;
+}
+
+const char* LossFunctionName(LossFunctionType type) {
+  switch (type) {
+    case LossFunctionType::kTrivial:
+      return "squared";
+    case LossFunctionType::kHuber:
+      return "huber";
+    case LossFunctionType::kSoftLOne:
+      return "soft-l1";
+    case LossFunctionType::kCauchy:
+      return "cauchy";
+  }
+  return "unknown";
+}
+
 void BundleAdjustmentOptions::Check() const {
   PARALLAX_CHECK_GE(max_dense_schur_variables, 0);
   PARALLAX_CHECK_GE(conjugate_gradient.max_num_iterations, 1);

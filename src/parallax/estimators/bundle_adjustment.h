@@ -22,6 +22,9 @@ enum class BundleAdjustmentSolver { kAuto, kDenseSchur, kSparseSchur, kCeres, kC
 
 // "auto", "dense-schur", "sparse-schur", "ceres", "ceres-iterative"; nullopt for anything else.
 std::optional<BundleAdjustmentSolver> BundleAdjustmentSolverFromName(const std::string& name);
+// "squared", "huber", "soft-l1" or "cauchy" (the command line's names), both ways.
+std::optional<LossFunctionType> LossFunctionTypeFromName(const std::string& name);
+const char* LossFunctionName(LossFunctionType type);
 
 struct BundleAdjustmentOptions {
   BundleAdjustmentSolver solver = BundleAdjustmentSolver::kAuto;

@@ -526,7 +526,8 @@ class IncrementalMapper::ModelBuilder {
                         << ba_summary.num_residuals
                         << " observations: " << ba_summary.num_iterations << " iterations"
                         << linear_iterations << ", " << ba_summary.seconds << " s, "
-                        << ba_summary.solver << " (" << ba_summary.termination << ")";
+                        << ba_summary.solver << ", " << LossFunctionName(ba_options.loss_function)
+                        << " loss (" << ba_summary.termination << ")";
   }
 
   const IncrementalMapperOptions& options_;
