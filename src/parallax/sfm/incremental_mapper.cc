@@ -126,14 +126,15 @@ class IncrementalMapper::ModelBuilder {
     }
     init_image_id1_ = seeded[0];
     init_image_id2_ = seeded[1];
-    const size_t num_points = CompleteAllTracks(options_.triangulation, &model_);
+    const size_t num_observations = CompleteAllTracks(options_.triangulation, &model_);
     PARALLAX_LOG(Info) << "mapper: starting from " << seeded.size() << " posed images, "
-                       << num_points << " observations triangulated";
-    GlobalBundleAdjust();
+                       << num_observations << " observations triangulated";
+    // As for registered images: the error before any adjustment that includes the image.
     for (const image_t image_id : seeded) {
       summary_->images[image_id].error_before_ba_px =
           reconstruction_.MeanReprojectionErrorOfImage(image_id);
     }
+    GlobalBundleAdjust();
     progress_->Increment(seeded.size());
     return true;
   }
