@@ -27,6 +27,23 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option("--min-tri-angle", mapper.triangulation.min_angle_deg,
                  "Smallest triangulation angle of a point, degrees")
       ->capture_default_str();
+  app.add_option("--tri-max-error", mapper.triangulation.max_reprojection_error_px,
+                 "Observations further off do not join a point when it is made, continued, "
+                 "completed or merged, pixels")
+      ->capture_default_str();
+  app.add_option("--tri-ignore-two-view-tracks", mapper.triangulation.ignore_two_view_tracks,
+                 "Give no point to features that only two images saw (as COLMAP does)")
+      ->capture_default_str();
+  app.add_option("--tri-complete-hops", mapper.triangulation.complete_max_transitivity,
+                 "Correspondence hops a point grows along when completed (0: no completion)")
+      ->capture_default_str();
+  app.add_option("--tri-merge", mapper.triangulation.merge_points,
+                 "Merge points that correspondences link when one point fits them all")
+      ->capture_default_str();
+  app.add_option("--tri-retriangulate-ratio", mapper.triangulation.retriangulate_min_ratio,
+                 "Image pairs with a smaller share of their matches in points are "
+                 "re-triangulated with relaxed thresholds (0: never)")
+      ->capture_default_str();
   app.add_flag("!--no-multiple-models", mapper.multiple_models,
                "Stop after the first model instead of starting new ones");
   app.add_flag_function(

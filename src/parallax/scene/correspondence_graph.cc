@@ -40,7 +40,6 @@ void CorrespondenceGraph::Finalize() {
   PARALLAX_CHECK(!finalized_);
   finalized_ = true;
   size_t num_nodes = 0;
-  std::vector<image_t> node_image_starts;
   for (auto& [image_id, entry] : images_) {
     entry.node_offset = num_nodes;
     num_nodes += entry.num_points2D;
@@ -49,6 +48,8 @@ void CorrespondenceGraph::Finalize() {
   for (const auto& [image_id, entry] : images_) {
     std::fill_n(node_image.begin() + entry.node_offset, entry.num_points2D, image_id);
   }
+
+  BuildCorrespondenceLists(num_nodes);
 
   // Strongest pairs first: their matches are the most reliable, so when a conflict arises
   // the weaker link is the one refused.
@@ -118,6 +119,42 @@ void CorrespondenceGraph::Finalize() {
       tracks_.empty() ? 0.0 : static_cast<double>(stats_.num_observations) / tracks_.size();
 }
 
+void CorrespondenceGraph::BuildCorrespondenceLists(size_t num_nodes) {
+  correspondence_offsets_.assign(num_nodes + 1, 0);
+  for (const auto& [pair_id, matches] : pair_matches_) {
+    const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
+    const size_t offset1 = images_[image_id1].node_offset;
+    const size_t offset2 = images_[image_id2].node_offset;
+    for (const FeatureMatch& match : matches) {
+      ++correspondence_offsets_[offset1 + match.point2D_idx1 + 1];
+      ++correspondence_offsets_[offset2 + match.point2D_idx2 + 1];
+    }
+  }
+  std::partial_sum(correspondence_offsets_.begin(), correspondence_offsets_.end(),
+                   correspondence_offsets_.begin());
+  correspondences_.resize(correspondence_offsets_.back());
+  std::vector<size_t> cursor(correspondence_offsets_.begin(), correspondence_offsets_.end() - 1);
+  for (const auto& [pair_id, matches] : pair_matches_) {
+    const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
+    const size_t offset1 = images_[image_id1].node_offset;
+    const size_t offset2 = images_[image_id2].node_offset;
+    for (const FeatureMatch& match : matches) {
+      correspondences_[cursor[offset1 + match.point2D_idx1]++] = {image_id2, match.point2D_idx2};
+      correspondences_[cursor[offset2 + match.point2D_idx2]++] = {image_id1, match.point2D_idx1};
+    }
+  }
+}
+
+std::span<const TrackElement> CorrespondenceGraph::CorrespondencesOf(image_t image_id,
+                                                                     point2D_t point2D_idx) const {
+  PARALLAX_CHECK(finalized_);
+  const ImageEntry& entry = images_.at(image_id);
+  PARALLAX_CHECK_LT(point2D_idx, entry.num_points2D);
+  const size_t node = entry.node_offset + point2D_idx;
+  return {correspondences_.data() + correspondence_offsets_[node],
+          correspondences_.data() + correspondence_offsets_[node + 1]};
+}
+
 std::vector<image_t> CorrespondenceGraph::ImageIds() const {
   std::vector<image_t> ids;
   for (const auto& [image_id, entry] : images_) ids.push_back(image_id);
@@ -139,6 +176,15 @@ track_t CorrespondenceGraph::TrackOf(image_t image_id, point2D_t point2D_idx) co
   const ImageEntry& entry = images_.at(image_id);
   PARALLAX_CHECK_LT(point2D_idx, entry.num_points2D);
   return node_track_[entry.node_offset + point2D_idx];
+}
+
+bool CorrespondenceGraph::IsTwoViewTrack(track_t track_id) const {
+  const std::vector<TrackElement>& elements = tracks_[track_id];
+  if (elements.size() != 2) return false;
+  for (const TrackElement& element : elements) {
+    if (CorrespondencesOf(element.image_id, element.point2D_idx).size() != 1) return false;
+  }
+  return true;
 }
 
 const track_t* CorrespondenceGraph::TracksOfImage(image_t image_id) const {

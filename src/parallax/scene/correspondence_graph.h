@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <map>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -47,10 +48,17 @@ class CorrespondenceGraph {
     return tracks_[track_id];
   }
   track_t TrackOf(image_t image_id, point2D_t point2D_idx) const;
+  // A track of two keypoints matched with each other and nothing else: a feature that only
+  // two images saw, which can never be held by more than two.
+  bool IsTwoViewTrack(track_t track_id) const;
   // The tracks of all the image's keypoints in order (kInvalidTrackId where none),
   // NumPoints2D(image_id) of them: one lookup for loops over an image's keypoints.
   const track_t* TracksOfImage(image_t image_id) const;
   const TrackStats& Stats() const { return stats_; }
+
+  // Every keypoint matched with keypoint `point2D_idx` of `image_id` in a verified pair, the
+  // refused unions included: what points grow and merge along, where tracks only seed them.
+  std::span<const TrackElement> CorrespondencesOf(image_t image_id, point2D_t point2D_idx) const;
 
   // Verified matches of a pair as added (oriented so point2D_idx1 is in the smaller id).
   const std::map<image_pair_t, FeatureMatches>& PairMatches() const { return pair_matches_; }
@@ -65,10 +73,16 @@ class CorrespondenceGraph {
     std::map<image_t, size_t> neighbors;
   };
 
+  void BuildCorrespondenceLists(size_t num_nodes);
+
   std::map<image_t, ImageEntry> images_;
   std::map<image_pair_t, FeatureMatches> pair_matches_;
   std::vector<std::vector<TrackElement>> tracks_;
   std::vector<track_t> node_track_;  // Track of every keypoint node (or kInvalidTrackId).
+  // Correspondences of node n: correspondences_[correspondence_offsets_[n] ..
+  // correspondence_offsets_[n + 1]), 8 bytes per keypoint and 16 per verified match.
+  std::vector<size_t> correspondence_offsets_;
+  std::vector<TrackElement> correspondences_;
   TrackStats stats_;
   bool finalized_ = false;
 };

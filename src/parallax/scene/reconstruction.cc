@@ -230,6 +230,12 @@ double Reconstruction::ComputeMeanTrackLength() const {
   return points3D_.empty() ? 0.0 : static_cast<double>(NumObservations()) / points3D_.size();
 }
 
+std::map<size_t, size_t> Reconstruction::ComputeTrackLengthHistogram() const {
+  std::map<size_t, size_t> histogram;
+  for (const auto& [point3D_id, point] : points3D_) ++histogram[point.track.Length()];
+  return histogram;
+}
+
 double Reconstruction::ComputeMeanObservationsPerRegImage() const {
   const size_t num_reg = NumRegImages();
   return num_reg == 0 ? 0.0 : static_cast<double>(NumObservations()) / num_reg;

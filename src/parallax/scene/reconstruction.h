@@ -69,6 +69,8 @@ class Reconstruction {
   size_t NumPoints3D() const { return points3D_.size(); }
   size_t NumObservations() const;
   double ComputeMeanTrackLength() const;
+  // Number of points by track length (images per point).
+  std::map<size_t, size_t> ComputeTrackLengthHistogram() const;
   double ComputeMeanObservationsPerRegImage() const;
 
   // Reprojection error in pixels of one observation, or +inf when behind the camera.

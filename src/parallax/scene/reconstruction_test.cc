@@ -43,6 +43,21 @@ TEST(Reconstruction, ObservationsStayConsistent) {
   EXPECT_FALSE(reconstruction.GetImage(2).points2D[1].HasPoint3D());
 }
 
+TEST(Reconstruction, TrackLengthHistogramCountsPointsByImagesPerPoint) {
+  Reconstruction reconstruction = TwoImageScene();
+  EXPECT_TRUE(reconstruction.ComputeTrackLengthHistogram().empty());
+  for (point2D_t idx = 0; idx < 3; ++idx) {
+    Track track;
+    track.AddElement(1, idx);
+    track.AddElement(2, idx);
+    if (idx == 0) track.AddElement(3, idx);
+    reconstruction.AddPoint3D(Eigen::Vector3d(0, 0, 5), track);
+  }
+  const std::map<size_t, size_t> expected = {{2, 2}, {3, 1}};
+  EXPECT_EQ(reconstruction.ComputeTrackLengthHistogram(), expected);
+  EXPECT_DOUBLE_EQ(reconstruction.ComputeMeanTrackLength(), 7.0 / 3.0);
+}
+
 // Lookups by id stay right through additions, deletions, copies, moves, preset ids (small and
 // far beyond the points added) and many points (the index grows).
 TEST(Reconstruction, PointLookupsByIdSurviveEditsAndCopies) {

@@ -20,6 +20,12 @@ struct Track {
   void AddElement(image_t image_id, point2D_t point2D_idx) {
     elements.push_back({image_id, point2D_idx});
   }
+  bool ContainsImage(image_t image_id) const {
+    for (const TrackElement& element : elements) {
+      if (element.image_id == image_id) return true;
+    }
+    return false;
+  }
   // Removes the element at `index` (order not kept).
   void DeleteElement(size_t index) {
     elements[index] = elements.back();

@@ -9,6 +9,8 @@
 #include "parallax/geometry/triangulation.h"
 #include "parallax/math/random.h"
 #include "parallax/sfm/next_view.h"
+#include "parallax/sfm/point_completion.h"
+#include "parallax/sfm/retriangulation.h"
 #include "parallax/sfm/tracked_reconstruction.h"
 #include "parallax/util/check.h"
 #include "parallax/util/interrupt.h"
@@ -290,15 +292,22 @@ class IncrementalMapper::ModelBuilder {
     std::vector<Eigen::Vector2d> points2D;
     std::vector<Eigen::Vector3d> points3D;
     std::vector<std::pair<point2D_t, point3D_t>> links;
+    // Every point a keypoint may see: those of its track and of its correspondences (more
+    // than one where a track holds several points); RANSAC sorts them out.
     const track_t* tracks = input_.correspondence_graph.TracksOfImage(image_id);
     for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
-      const track_t track_id = tracks[idx];
-      if (track_id == kInvalidTrackId) continue;
-      const point3D_t point3D_id = model_.PointOfTrack(track_id);
-      if (point3D_id == kInvalidPoint3DId) continue;
-      points2D.push_back(image.points2D[idx].xy);
-      points3D.push_back(reconstruction_.GetPoint3D(point3D_id).xyz);
-      links.emplace_back(idx, point3D_id);
+      std::vector<point3D_t> point3D_ids = model_.PointsOfCorrespondences({image_id, idx});
+      if (tracks[idx] != kInvalidTrackId) {
+        for (const point3D_t point3D_id : model_.PointsOfTrack(tracks[idx])) {
+          if (std::find(point3D_ids.begin(), point3D_ids.end(), point3D_id) == point3D_ids.end())
+            point3D_ids.push_back(point3D_id);
+        }
+      }
+      for (const point3D_t point3D_id : point3D_ids) {
+        points2D.push_back(image.points2D[idx].xy);
+        points3D.push_back(reconstruction_.GetPoint3D(point3D_id).xyz);
+        links.emplace_back(idx, point3D_id);
+      }
     }
     report->num_visible_points = points2D.size();
     const size_t min_inliers = static_cast<size_t>(options_.absolute_pose_min_num_inliers);
@@ -333,18 +342,7 @@ class IncrementalMapper::ModelBuilder {
     }
     image.cam_from_world = cam_from_world;
     reconstruction_.RegisterImage(image_id);
-    size_t num_added = 0;
-    for (size_t i = 0; i < links.size(); ++i) {
-      if (!pose.inlier_mask[i]) continue;
-      const auto [point2D_idx, point3D_id] = links[i];
-      if (!reconstruction_.ExistsPoint3D(point3D_id)) continue;
-      const double error = reconstruction_.ReprojectionError(
-          image_id, point2D_idx, reconstruction_.GetPoint3D(point3D_id).xyz);
-      if (error <= options_.triangulation.max_reprojection_error_px) {
-        reconstruction_.AddObservation(point3D_id, {image_id, point2D_idx});
-        ++num_added;
-      }
-    }
+    const size_t num_added = AddRegistrationObservations(image_id, links, pose.inlier_mask);
     if (num_added < min_inliers / 2) {
       reconstruction_.DeRegisterImage(image_id);
       report->reason =
@@ -359,6 +357,32 @@ class IncrementalMapper::ModelBuilder {
                         << points2D.size() << " PnP inliers, " << reconstruction_.NumRegImages()
                         << " images, " << reconstruction_.NumPoints3D() << " points)";
     return true;
+  }
+
+  // Links the inliers of the new image to their points: one point per keypoint and one
+  // keypoint per point, the closest fit where there is a choice. Returns the number added.
+  size_t AddRegistrationObservations(image_t image_id,
+                                     const std::vector<std::pair<point2D_t, point3D_t>>& links,
+                                     const std::vector<char>& inlier_mask) {
+    std::map<point2D_t, std::pair<double, point3D_t>> point_of_keypoint;
+    for (size_t i = 0; i < links.size(); ++i) {
+      if (!inlier_mask[i]) continue;
+      const auto [point2D_idx, point3D_id] = links[i];
+      const double error = reconstruction_.ReprojectionError(
+          image_id, point2D_idx, reconstruction_.GetPoint3D(point3D_id).xyz);
+      if (!(error <= options_.triangulation.max_reprojection_error_px)) continue;
+      const auto [it, inserted] = point_of_keypoint.try_emplace(point2D_idx, error, point3D_id);
+      if (!inserted && error < it->second.first) it->second = {error, point3D_id};
+    }
+    std::map<point3D_t, std::pair<double, point2D_t>> keypoint_of_point;
+    for (const auto& [point2D_idx, fit] : point_of_keypoint) {
+      const auto [it, inserted] = keypoint_of_point.try_emplace(fit.second, fit.first, point2D_idx);
+      if (!inserted && fit.first < it->second.first) it->second = {fit.first, point2D_idx};
+    }
+    for (const auto& [point3D_id, fit] : keypoint_of_point) {
+      model_.AddObservation(point3D_id, {image_id, fit.second});
+    }
+    return keypoint_of_point.size();
   }
 
   void AdjustAfterRegistration(image_t image_id) {
@@ -432,6 +456,7 @@ class IncrementalMapper::ModelBuilder {
     affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
     FilterPoints(options_.filter, affected, &reconstruction_);
     TriangulateImage(options_.triangulation, image_id, &model_);
+    CompleteAndMergePoints(options_.triangulation, affected, &model_);
   }
 
   // Intermediate global adjustments run one round; the last one (`final`) refines until the
@@ -440,6 +465,10 @@ class IncrementalMapper::ModelBuilder {
     const size_t num_observations_before = reconstruction_.NumObservations();
     const bool refine_principal_point = final && PrincipalPointsConstrained();
     const std::map<camera_t, std::vector<double>> params_before = CameraParams();
+    // Pairs left under-reconstructed get their second chance here, before the adjustment
+    // that settles the points they add.
+    const size_t num_retriangulated =
+        RetriangulateUnderReconstructedPairs(options_.triangulation, &model_);
     GlobalBundleAdjustRounds(final, refine_principal_point);
     if (refine_principal_point && !IntrinsicsPlausible()) {
       PARALLAX_LOG(Info) << "mapper: refined principal point left the image centre; "
@@ -453,7 +482,8 @@ class IncrementalMapper::ModelBuilder {
     points_at_last_global_ba_ = reconstruction_.NumPoints3D();
     PARALLAX_LOG(Debug) << "mapper: global BA on " << images_at_last_global_ba_ << " images, "
                         << points_at_last_global_ba_ << " points (" << num_observations_before
-                        << " -> " << reconstruction_.NumObservations() << " observations)";
+                        << " -> " << reconstruction_.NumObservations() << " observations, "
+                        << num_retriangulated << " re-triangulated)";
   }
 
   // The principal point is worth freeing only when every camera being refined is seen by
@@ -508,7 +538,8 @@ class IncrementalMapper::ModelBuilder {
       RunBundleAdjustment(ba_options, config);
       ++summary_->num_global_ba;
       const size_t num_filtered = FilterAllPoints(options_.filter, &reconstruction_);
-      const size_t num_completed = CompleteAllTracks(options_.triangulation, &model_);
+      const size_t num_completed = CompleteAllTracks(options_.triangulation, &model_) +
+                                   CompleteAndMergeAllPoints(options_.triangulation, &model_);
       const size_t num_observations = std::max<size_t>(1, reconstruction_.NumObservations());
       // Stop refining once the model barely changes.
       if (static_cast<double>(num_filtered + num_completed) / num_observations < 0.001) break;

@@ -12,8 +12,7 @@ struct TwoImages {
   Reconstruction model;
 };
 
-void Build(const std::vector<Eigen::Vector2d>& keypoints2, size_t num_triangulated,
-           TwoImages* scene) {
+void Build(const std::vector<Eigen::Vector2d>& keypoints2, TwoImages* scene) {
   scene->model.AddCamera(Camera::Create(1, CameraModelId::kPinhole, 100, 100, 100));
   FeatureMatches matches;
   for (image_t image_id : {1, 2}) {
@@ -29,21 +28,17 @@ void Build(const std::vector<Eigen::Vector2d>& keypoints2, size_t num_triangulat
   scene->graph.AddCorrespondences(1, 2, matches);
   scene->graph.Finalize();
   scene->model.RegisterImage(1);
+}
+
+// The score of image 2 when the first `num_triangulated` keypoints of image 1 have a point.
+double Score(const std::vector<Eigen::Vector2d>& keypoints2, size_t num_triangulated) {
+  TwoImages scene;
+  Build(keypoints2, &scene);
+  TrackedReconstruction tracked(scene.graph, &scene.model);
   for (point2D_t idx = 0; idx < num_triangulated; ++idx) {
     Track track;
     track.AddElement(1, idx);
-    scene->model.AddPoint3D(Eigen::Vector3d(0, 0, 1), track);
-  }
-}
-
-double Score(const std::vector<Eigen::Vector2d>& keypoints2, size_t num_triangulated) {
-  TwoImages scene;
-  Build(keypoints2, num_triangulated, &scene);
-  TrackedReconstruction tracked(scene.graph, &scene.model);
-  for (track_t track_id = 0; track_id < scene.graph.NumTracks(); ++track_id) {
-    const TrackElement& element = scene.graph.TrackElements(track_id).front();
-    const point3D_t point3D_id = scene.model.GetImage(1).points2D[element.point2D_idx].point3D_id;
-    if (point3D_id != kInvalidPoint3DId) tracked.SetPointOfTrack(track_id, point3D_id);
+    tracked.AddPoint3D(Eigen::Vector3d(0, 0, 1), track);
   }
   return VisibilityScore(2, tracked);
 }

@@ -13,6 +13,10 @@ void TrackTriangulationOptions::Check() const {
   PARALLAX_CHECK_GE(min_angle_deg, 0.0);
   PARALLAX_CHECK_GT(max_reprojection_error_px, 0.0);
   PARALLAX_CHECK_GE(max_pair_trials, 1);
+  PARALLAX_CHECK_GE(complete_max_transitivity, 0);
+  PARALLAX_CHECK(retriangulate_min_ratio >= 0 && retriangulate_min_ratio <= 1);
+  PARALLAX_CHECK_GE(retriangulate_min_angle_deg, 0.0);
+  PARALLAX_CHECK_GT(retriangulate_max_reprojection_error_px, 0.0);
 }
 
 namespace {
@@ -31,9 +35,8 @@ std::vector<View> CollectViews(track_t track_id, const TrackedReconstruction& mo
   std::vector<View> views;
   const Reconstruction& reconstruction = model.Model();
   for (const TrackElement& element : model.Graph().TrackElements(track_id)) {
-    if (!reconstruction.ExistsImage(element.image_id)) continue;
+    if (!model.IsFree(element)) continue;
     const Image& image = reconstruction.GetImage(element.image_id);
-    if (!image.registered || image.points2D[element.point2D_idx].HasPoint3D()) continue;
     View view;
     view.element = element;
     view.cam_from_world = image.cam_from_world.ToMatrix();
@@ -78,10 +81,12 @@ double MaxAngle(const std::vector<View>& views, const std::vector<size_t>& subse
 
 point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t track_id,
                            TrackedReconstruction* model) {
-  if (model->PointOfTrack(track_id) != kInvalidPoint3DId) return kInvalidPoint3DId;
+  if (options.ignore_two_view_tracks && model->Graph().IsTwoViewTrack(track_id)) {
+    return kInvalidPoint3DId;
+  }
   const std::vector<View> views = CollectViews(track_id, *model);
   if (views.size() < 2) return kInvalidPoint3DId;
-  Reconstruction& reconstruction = model->Model();
+  const Reconstruction& reconstruction = model->Model();
   const double min_angle = options.min_angle_deg * kDegToRad;
 
   // Hypotheses from view pairs: all pairs for short tracks, an even spread for long ones.
@@ -133,26 +138,51 @@ point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t tra
   }
   Track track;
   for (size_t i : final_views) track.elements.push_back(views[i].element);
-  const point3D_t point3D_id = reconstruction.AddPoint3D(*refined, std::move(track));
-  model->SetPointOfTrack(track_id, point3D_id);
-  return point3D_id;
+  return model->AddPoint3D(*refined, std::move(track));
+}
+
+bool ContinueKeypoint(const TrackTriangulationOptions& options, const TrackElement& element,
+                      const std::vector<point3D_t>& candidates, TrackedReconstruction* model) {
+  std::vector<point3D_t> point3D_ids = model->PointsOfCorrespondences(element);
+  point3D_ids.insert(point3D_ids.end(), candidates.begin(), candidates.end());
+  const Reconstruction& reconstruction = model->Model();
+  point3D_t best = kInvalidPoint3DId;
+  double best_error = options.max_reprojection_error_px;
+  for (const point3D_t point3D_id : point3D_ids) {
+    if (!reconstruction.ExistsPoint3D(point3D_id)) continue;
+    const Point3D& point = reconstruction.GetPoint3D(point3D_id);
+    const double error =
+        reconstruction.ReprojectionError(element.image_id, element.point2D_idx, point.xyz);
+    // One observation per image: a point seen there already is another keypoint's.
+    if (error <= best_error && !point.track.ContainsImage(element.image_id)) {
+      best = point3D_id;
+      best_error = error;
+    }
+  }
+  if (best == kInvalidPoint3DId) return false;
+  model->AddObservation(best, element);
+  return true;
 }
 
 size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
                      TrackedReconstruction* model) {
-  const point3D_t point3D_id = model->PointOfTrack(track_id);
-  if (point3D_id == kInvalidPoint3DId) return 0;
-  Reconstruction& reconstruction = model->Model();
-  const Eigen::Vector3d xyz = reconstruction.GetPoint3D(point3D_id).xyz;
+  std::vector<point3D_t> track_points;
+  bool listed = false;
   size_t num_added = 0;
   for (const TrackElement& element : model->Graph().TrackElements(track_id)) {
-    if (!reconstruction.ExistsImage(element.image_id)) continue;
-    const Image& image = reconstruction.GetImage(element.image_id);
-    if (!image.registered || image.points2D[element.point2D_idx].HasPoint3D()) continue;
-    if (reconstruction.ReprojectionError(element.image_id, element.point2D_idx, xyz) <=
-        options.max_reprojection_error_px) {
-      reconstruction.AddObservation(point3D_id, element);
+    if (!model->IsFree(element)) continue;
+    if (!listed) {  // Only tracks with a free element pay for the walk.
+      track_points = model->PointsOfTrack(track_id);
+      listed = true;
+    }
+    if (ContinueKeypoint(options, element, track_points, model)) {
       ++num_added;
+      // A point new to the track (from a correspondence) is a candidate for the rest.
+      const point3D_t point3D_id =
+          model->Model().GetImage(element.image_id).points2D[element.point2D_idx].point3D_id;
+      if (std::find(track_points.begin(), track_points.end(), point3D_id) == track_points.end()) {
+        track_points.push_back(point3D_id);
+      }
     }
   }
   return num_added;
@@ -160,21 +190,27 @@ size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
 
 size_t ContinueOrTriangulateTrack(const TrackTriangulationOptions& options, track_t track_id,
                                   TrackedReconstruction* model) {
-  if (model->PointOfTrack(track_id) != kInvalidPoint3DId)
-    return ContinueTrack(options, track_id, model);
+  size_t num_added = ContinueTrack(options, track_id, model);
   const point3D_t point3D_id = TriangulateTrack(options, track_id, model);
-  return point3D_id == kInvalidPoint3DId ? 0 : model->Model().GetPoint3D(point3D_id).track.Length();
+  if (point3D_id != kInvalidPoint3DId) {
+    num_added += model->Model().GetPoint3D(point3D_id).track.Length();
+  }
+  return num_added;
 }
 
 size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_id,
                         TrackedReconstruction* model) {
-  const Image& image = model->Model().GetImage(image_id);
+  const size_t num_points2D = model->Model().GetImage(image_id).points2D.size();
   const track_t* tracks = model->Graph().TracksOfImage(image_id);
   size_t num_added = 0;
-  for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
+  for (point2D_t idx = 0; idx < num_points2D; ++idx) {
     const track_t track_id = tracks[idx];
-    if (track_id != kInvalidTrackId)
+    if (track_id != kInvalidTrackId) {
       num_added += ContinueOrTriangulateTrack(options, track_id, model);
+    } else if (model->IsFree({image_id, idx}) &&
+               ContinueKeypoint(options, {image_id, idx}, {}, model)) {
+      ++num_added;
+    }
   }
   return num_added;
 }

@@ -4,36 +4,60 @@
 
 namespace parallax {
 
+// Thresholds of the triangulator: creating points from tracks, continuing them into new
+// views, completing and merging them (point_completion.h), and re-triangulating image pairs
+// that are under-reconstructed (retriangulation.h).
 struct TrackTriangulationOptions {
   double min_angle_deg = 1.5;              // Smallest triangulation angle a new point needs.
-  double max_reprojection_error_px = 4.0;  // Observations further off are not part of the point.
+  double max_reprojection_error_px = 4.0;  // Observations further off are not part of a point.
   int max_pair_trials = 30;                // View pairs tried as hypotheses for long tracks.
+  // Features that only two images saw get no point (COLMAP's tri_ignore_two_view_tracks):
+  // they tie two cameras by one weak constraint and never grow.
+  bool ignore_two_view_tracks = true;
+  // Correspondence hops a point grows along when completed (COLMAP's
+  // complete_max_transitivity).
+  int complete_max_transitivity = 5;
+  // Points that correspondences link merge when one point fits all their observations.
+  bool merge_points = true;
+  // Image pairs with a smaller share of their verified matches in one point are
+  // re-triangulated once, with the relaxed thresholds below (COLMAP's re_min_ratio).
+  double retriangulate_min_ratio = 0.2;
+  double retriangulate_min_angle_deg = 1.0;
+  double retriangulate_max_reprojection_error_px = 8.0;
   void Check() const;
 };
 
-// Triangulates a track that has no 3D point yet from its elements in registered images:
-// two-view hypotheses (linear triangulation) scored by how many views agree (positive depth,
-// reprojection error), the best refit on its agreeing views by multi-view triangulation.
-// Returns the new point id, or kInvalidPoint3DId when fewer than two views agree with enough
-// angle.
+// Triangulates a new point from the track's elements in registered images that belong to no
+// point yet (a track whose elements disagree can hold several points): two-view hypotheses
+// (linear triangulation) scored by how many views agree (positive depth, reprojection error),
+// the best refit on its agreeing views by multi-view triangulation. Returns the new point id,
+// or kInvalidPoint3DId when fewer than two views agree with enough angle.
 point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t track_id,
                            TrackedReconstruction* model);
 
-// Adds to the track's point every registered element it lacks whose reprojection fits.
-// Returns the number of observations added.
+// Adds a free keypoint to the point it fits best among `candidates` and the points of its
+// correspondences, when one that does not observe its image yet reprojects within the
+// threshold. Returns whether it was added.
+bool ContinueKeypoint(const TrackTriangulationOptions& options, const TrackElement& element,
+                      const std::vector<point3D_t>& candidates, TrackedReconstruction* model);
+
+// ContinueKeypoint for every free element of the track, with the track's points as
+// candidates. Returns the number of observations added.
 size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
                      TrackedReconstruction* model);
 
-// ContinueTrack when the track has a point, else TriangulateTrack. Returns the observations
-// added.
+// ContinueTrack, then TriangulateTrack on the elements that are still free. Returns the
+// observations added.
 size_t ContinueOrTriangulateTrack(const TrackTriangulationOptions& options, track_t track_id,
                                   TrackedReconstruction* model);
 
-// Continues or triangulates every track with an element in `image_id`.
+// Continues or triangulates every track with an element in `image_id`, and continues its
+// keypoints that have correspondences but no track (their unions were refused).
 size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_id,
                         TrackedReconstruction* model);
 
-// Continues or triangulates every track (after global bundle adjustment).
+// Continues or triangulates every track (after global bundle adjustment: elements left out
+// earlier get another chance in the adjusted model).
 size_t CompleteAllTracks(const TrackTriangulationOptions& options, TrackedReconstruction* model);
 
 }  // namespace parallax

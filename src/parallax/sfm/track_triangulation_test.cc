@@ -12,35 +12,15 @@ namespace {
 
 using test::EigenMatrixNear;
 
-// A ring of exact views and the mapper's input for it; `model` holds every image with its
-// true pose, the first `num_registered` registered, and no points yet.
+// Triangulation on a ring of exact views (PosedSyntheticScene).
 class TrackTriangulationTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    SyntheticDatasetOptions options;
-    options.num_images = 8;
-    options.num_points3D = 300;
-    options.min_track_length = 3;
-    options.seed = 21;
-    SynthesizeDataset(options, &truth_);
-    input_ = InputFromTruth(truth_);
-    for (const auto& [camera_id, camera] : truth_.Cameras()) model_.AddCamera(camera);
-    for (const auto& [image_id, image] : input_.images) {
-      Image posed = image;
-      posed.cam_from_world = truth_.GetImage(image_id).cam_from_world;
-      model_.AddImage(posed);
-    }
-  }
-
-  void Register(image_t first, image_t last) {
-    for (image_t image_id = first; image_id <= last; ++image_id) model_.RegisterImage(image_id);
-  }
+  void Register(image_t first, image_t last) { scene_.Register(first, last); }
 
   // The true point of a track (through its first element's keypoint in the truth).
   Eigen::Vector3d TruePoint(track_t track_id) const {
-    const TrackElement& element = input_.correspondence_graph.TrackElements(track_id).front();
     return truth_
-        .GetPoint3D(truth_.GetImage(element.image_id).points2D[element.point2D_idx].point3D_id)
+        .GetPoint3D(scene_.TruePointOf(input_.correspondence_graph.TrackElements(track_id).front()))
         .xyz;
   }
 
@@ -57,9 +37,10 @@ class TrackTriangulationTest : public ::testing::Test {
     return 0;
   }
 
-  Reconstruction truth_;
-  MapperInput input_;
-  Reconstruction model_;
+  PosedSyntheticScene scene_;
+  const Reconstruction& truth_ = scene_.truth;
+  const MapperInput& input_ = scene_.input;
+  Reconstruction& model_ = scene_.model;
 };
 
 TEST_F(TrackTriangulationTest, ExactViewsGiveTheTruePoint) {
@@ -121,6 +102,69 @@ TEST_F(TrackTriangulationTest, NewlyRegisteredViewsContinueTheirTracks) {
   }
   // Nothing is left to do.
   EXPECT_EQ(CompleteAllTracks(TrackTriangulationOptions(), &tracked), 0u);
+}
+
+TEST_F(TrackTriangulationTest, ATrackWhoseElementsDisagreeHoldsTwoPoints) {
+  Register(1, 8);
+  track_t track_id = kInvalidTrackId;
+  for (track_t t = 0; t < input_.correspondence_graph.NumTracks(); ++t) {
+    if (input_.correspondence_graph.TrackElements(t).size() >= 6) {
+      track_id = t;
+      break;
+    }
+  }
+  ASSERT_NE(track_id, kInvalidTrackId);
+  // Two of its keypoints see another point, a unit to the side (a repeated structure).
+  const std::vector<TrackElement>& elements = input_.correspondence_graph.TrackElements(track_id);
+  const Eigen::Vector3d other = TruePoint(track_id) + Eigen::Vector3d(1, 0, 0);
+  for (size_t i = 0; i < 2; ++i) {
+    Image& image = model_.GetImage(elements[i].image_id);
+    image.points2D[elements[i].point2D_idx].xy =
+        model_.GetCamera(image.camera_id).ImgFromCam(image.cam_from_world * other);
+  }
+  TrackedReconstruction tracked(input_.correspondence_graph, &model_);
+  const point3D_t first = TriangulateTrack(TrackTriangulationOptions(), track_id, &tracked);
+  const point3D_t second = TriangulateTrack(TrackTriangulationOptions(), track_id, &tracked);
+  ASSERT_NE(first, kInvalidPoint3DId);
+  ASSERT_NE(second, kInvalidPoint3DId);
+  EXPECT_THAT(model_.GetPoint3D(first).xyz, EigenMatrixNear(TruePoint(track_id), 1e-9));
+  EXPECT_EQ(model_.GetPoint3D(first).track.Length(), elements.size() - 2);
+  EXPECT_THAT(model_.GetPoint3D(second).xyz, EigenMatrixNear(other, 1e-9));
+  EXPECT_EQ(model_.GetPoint3D(second).track.Length(), 2u);
+  EXPECT_EQ(tracked.PointsOfTrack(track_id).size(), 2u);
+  // Every element has its point now: nothing is left for a third.
+  EXPECT_EQ(TriangulateTrack(TrackTriangulationOptions(), track_id, &tracked), kInvalidPoint3DId);
+}
+
+TEST(TwoViewTracks, AreLeftWithoutAPointUnlessAsked) {
+  PosedSyntheticScene scene;
+  scene.Register(1, 3);
+  // Only the true matches of images 1 and 2, and one keypoint of image 2 matched on into
+  // image 3: every track but that one is two-view.
+  const CorrespondenceGraph& full = scene.input.correspondence_graph;
+  CorrespondenceGraph graph;
+  for (const auto& [image_id, image] : scene.input.images) {
+    graph.AddImage(image_id, image.points2D.size());
+  }
+  graph.AddCorrespondences(1, 2, full.PairMatches().at(ImagePairToPairId(1, 2)));
+  const FeatureMatch onward = full.PairMatches().at(ImagePairToPairId(2, 3)).front();
+  graph.AddCorrespondences(2, 3, {onward});
+  graph.Finalize();
+  ASSERT_GT(graph.NumTracks(), 10u);
+
+  TrackedReconstruction tracked(graph, &scene.model);
+  TrackTriangulationOptions keep_two_view;
+  keep_two_view.ignore_two_view_tracks = false;
+  const track_t longer = graph.TrackOf(2, onward.point2D_idx1);
+  for (track_t track_id = 0; track_id < graph.NumTracks(); ++track_id) {
+    if (track_id == longer) continue;
+    ASSERT_TRUE(graph.IsTwoViewTrack(track_id));
+    EXPECT_EQ(TriangulateTrack(TrackTriangulationOptions(), track_id, &tracked), kInvalidPoint3DId);
+    EXPECT_NE(TriangulateTrack(keep_two_view, track_id, &tracked), kInvalidPoint3DId);
+  }
+  // Seen by three images: not two-view.
+  ASSERT_NE(longer, kInvalidTrackId);
+  EXPECT_FALSE(graph.IsTwoViewTrack(longer));
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <set>
 #include <vector>
 
 #include "parallax/scene/correspondence_graph.h"
@@ -7,35 +8,44 @@
 
 namespace parallax {
 
-// A model under construction together with its link to the feature tracks: each track has
-// at most one 3D point, and a point's observations are a subset of its track.
+// A model under construction together with the feature tracks and correspondences it grows
+// from. Tracks seed points; a track may hold more than one point (when its elements form
+// groups that disagree), and points grow beyond their track along the correspondences and
+// merge (track_triangulation.h, point_completion.h). Edits that add observations go through
+// here so that each track remembers a point of its own.
 class TrackedReconstruction {
  public:
-  TrackedReconstruction(const CorrespondenceGraph& graph, Reconstruction* reconstruction)
-      : graph_(graph),
-        reconstruction_(reconstruction),
-        track_point3D_(graph.NumTracks(), kInvalidPoint3DId) {}
+  TrackedReconstruction(const CorrespondenceGraph& graph, Reconstruction* reconstruction);
 
   const CorrespondenceGraph& Graph() const { return graph_; }
   Reconstruction& Model() { return *reconstruction_; }
   const Reconstruction& Model() const { return *reconstruction_; }
 
-  // The live 3D point of a track (points deleted by filtering read as none).
-  point3D_t PointOfTrack(track_t track_id) const {
-    const point3D_t point3D_id = track_point3D_[track_id];
-    if (point3D_id == kInvalidPoint3DId || !reconstruction_->ExistsPoint3D(point3D_id)) {
-      return kInvalidPoint3DId;
-    }
-    return point3D_id;
-  }
-  void SetPointOfTrack(track_t track_id, point3D_t point3D_id) {
-    track_point3D_[track_id] = point3D_id;
-  }
+  // A live point of the track in O(1): the last one that took one of its elements (points
+  // deleted by filtering or merged away read as none until another takes one). For ranking
+  // candidate images, where a walk over every track would cost too much.
+  point3D_t PointOfTrack(track_t track_id) const;
+  // Every live point holding one of the track's elements (a walk over its elements).
+  std::vector<point3D_t> PointsOfTrack(track_t track_id) const;
+  // Live points holding a keypoint matched with this one.
+  std::vector<point3D_t> PointsOfCorrespondences(const TrackElement& element) const;
+
+  // The keypoint is in a registered image and belongs to no point yet.
+  bool IsFree(const TrackElement& element) const;
+
+  point3D_t AddPoint3D(const Eigen::Vector3d& xyz, Track track);
+  void AddObservation(point3D_t point3D_id, const TrackElement& element);
+
+  // Image pairs already re-triangulated (each is, at most once).
+  std::set<image_pair_t>& RetriangulatedPairs() { return retriangulated_pairs_; }
 
  private:
+  void NotePoint(const TrackElement& element, point3D_t point3D_id);
+
   const CorrespondenceGraph& graph_;
   Reconstruction* reconstruction_;
   std::vector<point3D_t> track_point3D_;
+  std::set<image_pair_t> retriangulated_pairs_;
 };
 
 }  // namespace parallax

@@ -11,6 +11,7 @@
 
 #include "parallax/geometry/essential_matrix.h"
 #include "parallax/geometry/similarity.h"
+#include "parallax/scene/synthetic_dataset.h"
 #include "parallax/sfm/mapper_input.h"
 
 namespace parallax {
@@ -55,6 +56,40 @@ inline MapperInput InputFromTruth(const Reconstruction& truth) {
   FinalizeMapperInput(MapperInputOptions(), &input);
   return input;
 }
+
+// A ring of exact views, the mapper's input for it, and `model`: every image with its true
+// pose, none registered and no points yet (for the triangulator's tests).
+struct PosedSyntheticScene {
+  explicit PosedSyntheticScene(int num_images = 8, int num_points3D = 300,
+                               int min_track_length = 3) {
+    SyntheticDatasetOptions options;
+    options.num_images = num_images;
+    options.num_points3D = num_points3D;
+    options.min_track_length = min_track_length;
+    options.seed = 21;
+    SynthesizeDataset(options, &truth);
+    input = InputFromTruth(truth);
+    for (const auto& [camera_id, camera] : truth.Cameras()) model.AddCamera(camera);
+    for (const auto& [image_id, image] : input.images) {
+      Image posed = image;
+      posed.cam_from_world = truth.GetImage(image_id).cam_from_world;
+      model.AddImage(posed);
+    }
+  }
+
+  void Register(image_t first, image_t last) {
+    for (image_t image_id = first; image_id <= last; ++image_id) model.RegisterImage(image_id);
+  }
+
+  // The true point seen in a keypoint.
+  point3D_t TruePointOf(const TrackElement& element) const {
+    return truth.GetImage(element.image_id).points2D[element.point2D_idx].point3D_id;
+  }
+
+  Reconstruction truth;
+  MapperInput input;
+  Reconstruction model;
+};
 
 struct PoseErrors {
   double max_rotation_deg = 0;

@@ -1,0 +1,77 @@
+#include "parallax/sfm/tracked_reconstruction.h"
+
+#include <algorithm>
+
+namespace parallax {
+
+TrackedReconstruction::TrackedReconstruction(const CorrespondenceGraph& graph,
+                                             Reconstruction* reconstruction)
+    : graph_(graph),
+      reconstruction_(reconstruction),
+      track_point3D_(graph.NumTracks(), kInvalidPoint3DId) {}
+
+point3D_t TrackedReconstruction::PointOfTrack(track_t track_id) const {
+  const point3D_t point3D_id = track_point3D_[track_id];
+  if (point3D_id == kInvalidPoint3DId || !reconstruction_->ExistsPoint3D(point3D_id)) {
+    return kInvalidPoint3DId;
+  }
+  return point3D_id;
+}
+
+namespace {
+
+void AddPointOf(const Reconstruction& reconstruction, const TrackElement& element,
+                std::vector<point3D_t>* point3D_ids) {
+  if (!reconstruction.ExistsImage(element.image_id)) return;
+  const Image& image = reconstruction.GetImage(element.image_id);
+  if (!image.registered) return;
+  const point3D_t point3D_id = image.points2D[element.point2D_idx].point3D_id;
+  if (point3D_id == kInvalidPoint3DId) return;
+  if (std::find(point3D_ids->begin(), point3D_ids->end(), point3D_id) == point3D_ids->end()) {
+    point3D_ids->push_back(point3D_id);
+  }
+}
+
+}  // namespace
+
+std::vector<point3D_t> TrackedReconstruction::PointsOfTrack(track_t track_id) const {
+  std::vector<point3D_t> point3D_ids;
+  for (const TrackElement& element : graph_.TrackElements(track_id)) {
+    AddPointOf(*reconstruction_, element, &point3D_ids);
+  }
+  return point3D_ids;
+}
+
+std::vector<point3D_t> TrackedReconstruction::PointsOfCorrespondences(
+    const TrackElement& element) const {
+  std::vector<point3D_t> point3D_ids;
+  for (const TrackElement& other :
+       graph_.CorrespondencesOf(element.image_id, element.point2D_idx)) {
+    AddPointOf(*reconstruction_, other, &point3D_ids);
+  }
+  return point3D_ids;
+}
+
+bool TrackedReconstruction::IsFree(const TrackElement& element) const {
+  if (!reconstruction_->ExistsImage(element.image_id)) return false;
+  const Image& image = reconstruction_->GetImage(element.image_id);
+  return image.registered && !image.points2D[element.point2D_idx].HasPoint3D();
+}
+
+point3D_t TrackedReconstruction::AddPoint3D(const Eigen::Vector3d& xyz, Track track) {
+  const point3D_t point3D_id = reconstruction_->AddPoint3D(xyz, track);
+  for (const TrackElement& element : track.elements) NotePoint(element, point3D_id);
+  return point3D_id;
+}
+
+void TrackedReconstruction::AddObservation(point3D_t point3D_id, const TrackElement& element) {
+  reconstruction_->AddObservation(point3D_id, element);
+  NotePoint(element, point3D_id);
+}
+
+void TrackedReconstruction::NotePoint(const TrackElement& element, point3D_t point3D_id) {
+  const track_t track_id = graph_.TrackOf(element.image_id, element.point2D_idx);
+  if (track_id != kInvalidTrackId) track_point3D_[track_id] = point3D_id;
+}
+
+}  // namespace parallax
