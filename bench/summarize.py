@@ -46,6 +46,7 @@ def model_stats(evaluation):
         "images_total": evaluation.get("images_gt"),
         "points3D": evaluation.get("points3D"),
         "observations": evaluation.get("observations"),
+        "mean_track_length": evaluation.get("mean_track_length"),
         "mean_reprojection_error_px": evaluation.get("mean_reprojection_error_px"),
         "center_error_median": (evaluation.get("center_error") or {}).get("median"),
         "center_error_relative_median": (evaluation.get("center_error_relative") or {}).get("median"),
@@ -139,6 +140,8 @@ def table(dataset, result):
     lines.append(f"| registered images | {fmt(p.get('images_registered'))} / {fmt(p.get('images_total'))} "
                  f"| {fmt(c.get('images_registered'))} / {fmt(c.get('images_total'))} | |")
     row("3D points", "points3D", 0, show_ratio=False)
+    row("observations", "observations", 0, show_ratio=False)
+    row("mean track length", "mean_track_length", 2, show_ratio=False)
     row("mean reprojection error (px)", "mean_reprojection_error_px", 3, show_ratio=False)
     row("median centre error (GT units)", "center_error_median", 5, show_ratio=False)
     row("median rotation error (deg)", "rotation_error_deg_median", 3, show_ratio=False)
@@ -146,10 +149,12 @@ def table(dataset, result):
         model = m.get("parallax_model") or {}
         lines.append(f"| mapping alone on COLMAP's database (s) | {fmt(m.get('parallax_s'))} "
                      f"| {fmt(m.get('colmap_s'))} | {ratio(m.get('colmap_s'), m.get('parallax_s'))} |")
-        lines.append(f"| — its registered images / points / median centre error | "
+        lines.append(f"| — its registered images / points / mean track length / median centre error | "
                      f"{fmt(model.get('images_registered'))} / {fmt(model.get('points3D'))} / "
+                     f"{fmt(model.get('mean_track_length'))} / "
                      f"{fmt(model.get('center_error_median'), 5)} | "
                      f"{fmt(c.get('images_registered'))} / {fmt(c.get('points3D'))} / "
+                     f"{fmt(c.get('mean_track_length'))} / "
                      f"{fmt(c.get('center_error_median'), 5)} | |")
     if "verification_thread_s" in p:
         lines.append("")

@@ -10,6 +10,17 @@ namespace {
 nlohmann::json NumberOrNull(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
+
+// [{"length": 2, "points": N}, ...]: the lengths present, shortest first.
+nlohmann::json TrackLengthHistogramJson(const Reconstruction* model) {
+  nlohmann::json histogram = nlohmann::json::array();
+  if (model == nullptr) return histogram;
+  for (const auto& [length, count] : model->ComputeTrackLengthHistogram()) {
+    histogram.push_back({{"length", length}, {"points", count}});
+  }
+  return histogram;
+}
+
 }  // namespace
 
 nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimings& timings) {
@@ -25,6 +36,7 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   summary["points3D"] = model ? model->NumPoints3D() : 0;
   summary["observations"] = model ? model->NumObservations() : 0;
   summary["mean_track_length"] = model ? model->ComputeMeanTrackLength() : 0.0;
+  summary["track_length_histogram"] = TrackLengthHistogramJson(model);
   double mean_error = 0;
   if (model) {
     Reconstruction copy = *model;

@@ -120,6 +120,7 @@ EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const Grou
   metrics.num_points3D = model.NumPoints3D();
   metrics.num_observations = model.NumObservations();
   metrics.mean_track_length = model.ComputeMeanTrackLength();
+  metrics.track_length_histogram = model.ComputeTrackLengthHistogram();
 
   double error_sum = 0;
   size_t error_count = 0;
@@ -247,6 +248,11 @@ nlohmann::json MetricsToJson(const EvaluationMetrics& metrics) {
   json["points3D"] = metrics.num_points3D;
   json["observations"] = metrics.num_observations;
   json["mean_track_length"] = metrics.mean_track_length;
+  nlohmann::json histogram = nlohmann::json::array();
+  for (const auto& [length, count] : metrics.track_length_histogram) {
+    histogram.push_back({{"length", length}, {"points", count}});
+  }
+  json["track_length_histogram"] = histogram;
   json["mean_reprojection_error_px"] = metrics.mean_reprojection_error_px;
   nlohmann::json images = nlohmann::json::array();
   for (const ImageEvaluation& image : metrics.images) {
@@ -319,6 +325,12 @@ std::string MetricsToText(const EvaluationMetrics& metrics) {
   row("3D points", std::to_string(metrics.num_points3D));
   row("observations", std::to_string(metrics.num_observations));
   row("mean track length", fixed(metrics.mean_track_length, 3));
+  std::string histogram;
+  for (const auto& [length, count] : metrics.track_length_histogram) {
+    histogram +=
+        (histogram.empty() ? "" : ", ") + std::to_string(length) + ": " + std::to_string(count);
+  }
+  row("points by track length", histogram.empty() ? "-" : histogram);
   row("mean reprojection error (px)", fixed(metrics.mean_reprojection_error_px, 4));
   return out.str();
 }

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -83,6 +84,7 @@ struct EvaluationMetrics {
   size_t num_points3D = 0;
   size_t num_observations = 0;
   double mean_track_length = 0;
+  std::map<size_t, size_t> track_length_histogram;  // Points by images per point.
   double mean_reprojection_error_px = 0;
 
   // One entry per GT image, in GT order.

@@ -72,6 +72,12 @@ TEST(EvaluateReconstruction, RecoversKnownSimilarityExactly) {
     EXPECT_LT(metrics.mean_reprojection_error_px, 1e-9);
     EXPECT_EQ(metrics.num_points3D, truth.NumPoints3D());
     EXPECT_DOUBLE_EQ(metrics.mean_track_length, truth.ComputeMeanTrackLength());
+    size_t num_histogram_points = 0;
+    for (const auto& [length, count] : metrics.track_length_histogram) {
+      EXPECT_GE(length, 2u);
+      num_histogram_points += count;
+    }
+    EXPECT_EQ(num_histogram_points, truth.NumPoints3D());
     // The scene scale is the mean distance of the GT centres from their centroid: the ring
     // radius of the synthetic layout.
     EXPECT_NEAR(metrics.gt_scene_scale, 4.0, 1e-9);

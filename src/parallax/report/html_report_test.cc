@@ -75,6 +75,10 @@ class ReportFixture : public ::testing::Test {
         {"images_registered", model_.NumRegImages()},
         {"points3D", model_.NumPoints3D()},
         {"mean_track_length", model_.ComputeMeanTrackLength()},
+        {"track_length_histogram",
+         {{{"length", 2}, {"points", 40}},
+          {{"length", 3}, {"points", 25}},
+          {{"length", 5}, {"points", 7}}}},
         {"mean_reprojection_error_px", 0.42},
         {"timings_s", {{"features", 1.5}, {"matching", 2.25}, {"mapping", 3.0}, {"total", 6.9}}},
         {"models",
@@ -368,6 +372,7 @@ TEST_F(ReportFixture, RunsInHeadlessChromiumWithoutErrors) {
                          "timings", "images"}) {
     EXPECT_NE(dom.find("id=\"" + std::string(id) + "\""), std::string::npos) << id;
   }
+  EXPECT_NE(dom.find("Track lengths"), std::string::npos);
 
   fs::remove(png_path);
   ASSERT_EQ(std::system(("timeout 180 " + chromium + flags +

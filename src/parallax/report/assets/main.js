@@ -63,6 +63,17 @@
       stat(fmt(e.rotation_error_deg.median, 3) + '°', 'median rotation error vs. ground truth');
       stat(fmt(100 * e.center_error_relative.median, 2) + ' %', 'median camera-centre error (of scene scale)');
     }
+    const histogram = summary.track_length_histogram || [];
+    if (histogram.length > 0) {
+      el('h3', {}, node, 'Track lengths');
+      el('p', { class: 'note' }, node,
+         'Points by the number of images that observe them: the longer the tracks, the more ' +
+         'images each point ties together.');
+      barChart(node, { labels: histogram.map((bin) => String(bin.length)), height: 220,
+                       xTitle: 'images per point', yTitle: 'points',
+                       series: [{ name: 'points', color: '#4c78a8',
+                                  values: histogram.map((bin) => bin.points) }] });
+    }
   });
 
   guarded('scene', () => {
