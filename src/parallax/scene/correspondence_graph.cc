@@ -120,6 +120,15 @@ void CorrespondenceGraph::Finalize() {
 }
 
 void CorrespondenceGraph::BuildCorrespondenceLists(size_t num_nodes) {
+  // First node of every image by id, for lookups without the map (ids are dense in
+  // practice; sparse ones beyond a few times the image count fall back to the map).
+  const image_t max_image_id = images_.empty() ? 0 : images_.rbegin()->first;
+  if (max_image_id < 4 * images_.size() + 1024) {
+    image_nodes_.assign(max_image_id + 1, {kNoImage, 0});
+    for (const auto& [image_id, entry] : images_) {
+      image_nodes_[image_id] = {entry.node_offset, entry.num_points2D};
+    }
+  }
   correspondence_offsets_.assign(num_nodes + 1, 0);
   for (const auto& [pair_id, matches] : pair_matches_) {
     const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
@@ -148,9 +157,15 @@ void CorrespondenceGraph::BuildCorrespondenceLists(size_t num_nodes) {
 std::span<const TrackElement> CorrespondenceGraph::CorrespondencesOf(image_t image_id,
                                                                      point2D_t point2D_idx) const {
   PARALLAX_CHECK(finalized_);
-  const ImageEntry& entry = images_.at(image_id);
-  PARALLAX_CHECK_LT(point2D_idx, entry.num_points2D);
-  const size_t node = entry.node_offset + point2D_idx;
+  size_t node;
+  if (image_id < image_nodes_.size() && image_nodes_[image_id].first != kNoImage) {
+    PARALLAX_CHECK_LT(point2D_idx, image_nodes_[image_id].second);
+    node = image_nodes_[image_id].first + point2D_idx;
+  } else {
+    const ImageEntry& entry = images_.at(image_id);
+    PARALLAX_CHECK_LT(point2D_idx, entry.num_points2D);
+    node = entry.node_offset + point2D_idx;
+  }
   return {correspondences_.data() + correspondence_offsets_[node],
           correspondences_.data() + correspondence_offsets_[node + 1]};
 }

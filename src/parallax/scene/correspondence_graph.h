@@ -82,6 +82,9 @@ class CorrespondenceGraph {
   // Correspondences of node n: correspondences_[correspondence_offsets_[n] ..
   // correspondence_offsets_[n + 1]), 8 bytes per keypoint and 16 per verified match.
   std::vector<size_t> correspondence_offsets_;
+  static constexpr size_t kNoImage = SIZE_MAX;
+  // By image id: the image's first node and its number of keypoints.
+  std::vector<std::pair<size_t, size_t>> image_nodes_;
   std::vector<TrackElement> correspondences_;
   TrackStats stats_;
   bool finalized_ = false;

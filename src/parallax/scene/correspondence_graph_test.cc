@@ -52,6 +52,21 @@ TEST(CorrespondenceGraph, SplitsInconsistentComponentInsteadOfDropping) {
   EXPECT_EQ(graph.TrackOf(1, 0), graph.TrackOf(3, 0));
   EXPECT_EQ(graph.TrackElements(graph.TrackOf(1, 0)).size(), 3u);
   EXPECT_EQ(graph.TrackOf(1, 1), kInvalidTrackId);  // Its only link was refused.
+  // The refused match is still a correspondence, in both directions.
+  const auto refused = graph.CorrespondencesOf(1, 1);
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_EQ(refused[0], (TrackElement{3, 0}));
+  const auto back = graph.CorrespondencesOf(3, 0);
+  ASSERT_EQ(back.size(), 2u);
+  using Keypoint = std::pair<image_t, point2D_t>;
+  const std::set<Keypoint> expected = {{1, 1}, {2, 0}};
+  const std::set<Keypoint> found = {{back[0].image_id, back[0].point2D_idx},
+                                    {back[1].image_id, back[1].point2D_idx}};
+  EXPECT_EQ(found, expected);
+  EXPECT_TRUE(graph.CorrespondencesOf(1, 9).empty());
+  EXPECT_THROW(graph.CorrespondencesOf(1, 10), CheckError);
+  EXPECT_THROW(graph.CorrespondencesOf(4, 0), std::out_of_range);
+  EXPECT_FALSE(graph.IsTwoViewTrack(graph.TrackOf(1, 5)));  // Seen by images 1, 2 and 3.
 }
 
 TEST(CorrespondenceGraph, RejectsOutOfRangeMatches) {

@@ -823,6 +823,12 @@ std::vector<std::pair<image_pair_t, FeatureMatches>> Database::ReadAllMatches() 
 
 // ----- Two-view geometries ------------------------------------------------------------------
 
+void Database::DeleteTwoViewGeometry(image_t image_id1, image_t image_id2) {
+  Statement statement(db_, path_, "DELETE FROM two_view_geometries WHERE pair_id = ?;");
+  statement.BindInt64(1, static_cast<int64_t>(ImagePairToPairId(image_id1, image_id2)));
+  statement.Step("cannot delete a two-view geometry");
+}
+
 void Database::WriteTwoViewGeometry(image_t image_id1, image_t image_id2,
                                     const TwoViewGeometry& geometry) {
   PARALLAX_CHECK_NE(image_id1, image_id2);

@@ -92,6 +92,8 @@ class Database {
   // stored swapped.
   void WriteTwoViewGeometry(image_t image_id1, image_t image_id2, const TwoViewGeometry& geometry);
   bool ExistsTwoViewGeometry(image_t image_id1, image_t image_id2) const;
+  // Removes the pair's geometry (nothing when none is stored), so that it can be written anew.
+  void DeleteTwoViewGeometry(image_t image_id1, image_t image_id2);
   TwoViewGeometry ReadTwoViewGeometry(image_t image_id1, image_t image_id2) const;
   // (pair_id, geometry) for every stored pair, ids in stored order (image_id1 < image_id2).
   std::vector<std::pair<image_pair_t, TwoViewGeometry>> ReadTwoViewGeometries() const;

@@ -275,6 +275,19 @@ TEST_F(DatabaseTest, FingerprintsRoundTripAndGoWithTheirImage) {
   EXPECT_NO_THROW(database.DeleteImage(a));  // Already gone: nothing to do.
 }
 
+TEST_F(DatabaseTest, ATwoViewGeometryCanBeDeletedAndWrittenAnew) {
+  Database database(path_);
+  database.WriteTwoViewGeometry(3, 2, RandomGeometry(8));
+  database.WriteTwoViewGeometry(1, 2, RandomGeometry(6));
+  EXPECT_ANY_THROW(database.WriteTwoViewGeometry(2, 3, RandomGeometry(5)));
+  database.DeleteTwoViewGeometry(2, 3);
+  EXPECT_FALSE(database.ExistsTwoViewGeometry(3, 2));
+  EXPECT_TRUE(database.ExistsTwoViewGeometry(1, 2));
+  database.WriteTwoViewGeometry(2, 3, RandomGeometry(5));
+  EXPECT_EQ(database.ReadTwoViewGeometry(2, 3).inlier_matches.size(), 5u);
+  EXPECT_NO_THROW(database.DeleteTwoViewGeometry(4, 5));  // Nothing stored: nothing to do.
+}
+
 TEST_F(DatabaseTest, MatchesAreStoredWithSmallerIdFirst) {
   Database database(path_);
   const FeatureMatches matches12 = RandomMatches(50);

@@ -13,10 +13,15 @@ size_t CompletePoint(const TrackTriangulationOptions& options, point3D_t point3D
   const Reconstruction& reconstruction = model->Model();
   if (!reconstruction.ExistsPoint3D(point3D_id)) return 0;
   const Point3D& point = reconstruction.GetPoint3D(point3D_id);
-  // Breadth first through every correspondence (registered or not, in a point or not), as
-  // far as the hops allow; the free keypoints reached are the candidates.
-  std::vector<TrackElement> visited = point.track.elements;
-  std::vector<TrackElement> frontier = visited;
+  // Breadth first through the correspondences, as far as the hops allow, through the free
+  // keypoints (registered images, no point): they are the candidates. Keypoints of other
+  // points are their own points' business (merging), and those of images not registered yet
+  // cannot join; walking through either would spread over the whole graph where wrong
+  // matches link points.
+  // Keypoints of the point itself are recognised through their image, so `visited` holds
+  // only the others (most correspondences lead back into the point).
+  std::vector<TrackElement> frontier = point.track.elements;
+  std::vector<TrackElement> visited;
   std::vector<TrackElement> next;
   size_t num_added = 0;
   for (int hop = 0; hop < options.complete_max_transitivity && !frontier.empty(); ++hop) {
@@ -24,10 +29,17 @@ size_t CompletePoint(const TrackTriangulationOptions& options, point3D_t point3D
     for (const TrackElement& element : frontier) {
       for (const TrackElement& other :
            model->Graph().CorrespondencesOf(element.image_id, element.point2D_idx)) {
-        if (std::find(visited.begin(), visited.end(), other) != visited.end()) continue;
+        const Image* image = model->FindImage(other.image_id);
+        if (image == nullptr) continue;
+        const point3D_t other_point = image->points2D[other.point2D_idx].point3D_id;
+        if (other_point == point3D_id ||
+            std::find(visited.begin(), visited.end(), other) != visited.end()) {
+          continue;
+        }
+        if (other_point != kInvalidPoint3DId || !image->registered) continue;
         visited.push_back(other);
         next.push_back(other);
-        if (!model->IsFree(other) || point.track.ContainsImage(other.image_id)) continue;
+        if (point.track.ContainsImage(other.image_id)) continue;
         if (reconstruction.ReprojectionError(other.image_id, other.point2D_idx, point.xyz) <=
             options.max_reprojection_error_px) {
           model->AddObservation(point3D_id, other);
@@ -53,8 +65,7 @@ std::vector<TrackElement> MergedObservations(const Reconstruction& reconstructio
     for (const TrackElement& element : point->track.elements) {
       const double error =
           reconstruction.ReprojectionError(element.image_id, element.point2D_idx, xyz);
-      const auto [it, inserted] =
-          best.try_emplace(element.image_id, error, element.point2D_idx);
+      const auto [it, inserted] = best.try_emplace(element.image_id, error, element.point2D_idx);
       if (!inserted && error < it->second.first) it->second = {error, element.point2D_idx};
     }
   }
@@ -67,8 +78,8 @@ std::vector<TrackElement> MergedObservations(const Reconstruction& reconstructio
 }
 
 // The point at which the observations of both agree best (multi-view linear triangulation).
-std::optional<Eigen::Vector3d> Refit(const Reconstruction& reconstruction,
-                                     const Point3D& point1, const Point3D& point2) {
+std::optional<Eigen::Vector3d> Refit(const Reconstruction& reconstruction, const Point3D& point1,
+                                     const Point3D& point2) {
   std::vector<Matrix3x4d> matrices;
   std::vector<Eigen::Vector2d> points;
   for (const Point3D* point : {&point1, &point2}) {
@@ -119,8 +130,8 @@ point3D_t MergeOnce(const TrackTriangulationOptions& options, point3D_t point3D_
       const Point3D& other = reconstruction.GetPoint3D(other_id);
       const std::optional<Eigen::Vector3d> xyz = Refit(reconstruction, point, other);
       if (!xyz) continue;
-      const std::vector<TrackElement> elements = MergedObservations(
-          reconstruction, point, other, *xyz, options.max_reprojection_error_px);
+      const std::vector<TrackElement> elements =
+          MergedObservations(reconstruction, point, other, *xyz, options.max_reprojection_error_px);
       if (elements.size() < 2) continue;
       return ReplaceByMerged(point3D_id, other_id, *xyz, elements, model);
     }

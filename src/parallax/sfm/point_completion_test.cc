@@ -14,6 +14,15 @@ namespace {
 
 using test::EigenMatrixNear;
 
+// COLMAP's values (completion, merging and re-triangulation are off by default).
+TrackTriangulationOptions Enabled() {
+  TrackTriangulationOptions options;
+  options.complete_max_transitivity = 5;
+  options.merge_points = true;
+  options.retriangulate_min_ratio = 0.2;
+  return options;
+}
+
 // Completion and merging on a ring of exact views, all registered.
 class PointCompletionTest : public ::testing::Test {
  protected:
@@ -61,7 +70,7 @@ TEST_F(PointCompletionTest, CompletionAndMergingRecoverTracksSplitOnPurpose) {
   ASSERT_GT(num_split, 50u);
   ASSERT_EQ(scene_.model.NumPoints3D(), 2 * num_split);
 
-  EXPECT_GT(CompleteAndMergeAllPoints(TrackTriangulationOptions(), &tracked), 0u);
+  EXPECT_GT(CompleteAndMergeAllPoints(Enabled(), &tracked), 0u);
   EXPECT_EQ(scene_.model.NumPoints3D(), num_split);
   for (track_t track_id = 0; track_id < graph_.NumTracks(); ++track_id) {
     const std::vector<TrackElement>& elements = graph_.TrackElements(track_id);
@@ -80,12 +89,10 @@ TEST_F(PointCompletionTest, AnObservationFarFromItsPointIsNotAdded) {
   while (graph_.TrackElements(track_id).size() < 4) ++track_id;
   const std::vector<TrackElement>& elements = graph_.TrackElements(track_id);
   const TrackElement moved = elements[3];
-  scene_.model.GetImage(moved.image_id).points2D[moved.point2D_idx].xy +=
-      Eigen::Vector2d(25, -18);
+  scene_.model.GetImage(moved.image_id).points2D[moved.point2D_idx].xy += Eigen::Vector2d(25, -18);
   TrackedReconstruction tracked(graph_, &scene_.model);
   const point3D_t point3D_id = AddPointOn(elements, 0, 2, &tracked);
-  EXPECT_EQ(CompletePoint(TrackTriangulationOptions(), point3D_id, &tracked),
-            elements.size() - 3);
+  EXPECT_EQ(CompletePoint(Enabled(), point3D_id, &tracked), elements.size() - 3);
   const Point3D& point = scene_.model.GetPoint3D(point3D_id);
   EXPECT_EQ(point.track.Length(), elements.size() - 1);
   for (const TrackElement& element : point.track.elements) EXPECT_FALSE(element == moved);
@@ -116,7 +123,7 @@ TEST(PointMerging, TwoDifferentPointsAreNeverMerged) {
   graph.Finalize();
 
   TrackedReconstruction tracked(graph, &scene.model);
-  TrackTriangulationOptions options;
+  const TrackTriangulationOptions options = Enabled();
   CompleteAllTracks(options, &tracked);
   const size_t num_points = scene.model.NumPoints3D();
   ASSERT_GT(num_points, 100u);
@@ -134,7 +141,7 @@ TEST(PointMerging, TwoDifferentPointsAreNeverMerged) {
 TEST_F(PointCompletionTest, UnderReconstructedPairsAreRetriangulatedOnceWithTheRelaxedAngle) {
   TrackedReconstruction tracked(graph_, &scene_.model);
   // Too strict an angle leaves the pairs without points.
-  TrackTriangulationOptions options;
+  TrackTriangulationOptions options = Enabled();
   options.min_angle_deg = 179;
   CompleteAllTracks(options, &tracked);
   const size_t num_before = scene_.model.NumObservations();

@@ -45,8 +45,8 @@ size_t RetriangulateUnderReconstructedPairs(const TrackTriangulationOptions& opt
     model->RetriangulatedPairs().insert(pair_id);
     std::set<track_t> tracks;
     for (const FeatureMatch& match : matches) {
-      for (const TrackElement& element :
-           {TrackElement{image_id1, match.point2D_idx1}, TrackElement{image_id2, match.point2D_idx2}}) {
+      for (const TrackElement& element : {TrackElement{image_id1, match.point2D_idx1},
+                                          TrackElement{image_id2, match.point2D_idx2}}) {
         if (!model->IsFree(element)) continue;
         const track_t track_id = graph.TrackOf(element.image_id, element.point2D_idx);
         if (track_id != kInvalidTrackId) {

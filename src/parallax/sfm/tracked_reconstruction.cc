@@ -18,26 +18,35 @@ point3D_t TrackedReconstruction::PointOfTrack(track_t track_id) const {
   return point3D_id;
 }
 
-namespace {
+const Image* TrackedReconstruction::FindImage(image_t image_id) const {
+  if (image_id < image_cache_.size() && image_cache_[image_id] != nullptr) {
+    return image_cache_[image_id];
+  }
+  if (!reconstruction_->ExistsImage(image_id)) return nullptr;
+  const Image* image = &reconstruction_->GetImage(image_id);
+  constexpr image_t kMaxCachedImageId = 1 << 22;  // Ids beyond are looked up every time.
+  if (image_id < kMaxCachedImageId) {
+    if (image_id >= image_cache_.size()) image_cache_.resize(image_id + 1, nullptr);
+    image_cache_[image_id] = image;
+  }
+  return image;
+}
 
-void AddPointOf(const Reconstruction& reconstruction, const TrackElement& element,
-                std::vector<point3D_t>* point3D_ids) {
-  if (!reconstruction.ExistsImage(element.image_id)) return;
-  const Image& image = reconstruction.GetImage(element.image_id);
-  if (!image.registered) return;
-  const point3D_t point3D_id = image.points2D[element.point2D_idx].point3D_id;
+void TrackedReconstruction::AddPointOf(const TrackElement& element,
+                                       std::vector<point3D_t>* point3D_ids) const {
+  const Image* image = FindImage(element.image_id);
+  if (image == nullptr || !image->registered) return;
+  const point3D_t point3D_id = image->points2D[element.point2D_idx].point3D_id;
   if (point3D_id == kInvalidPoint3DId) return;
   if (std::find(point3D_ids->begin(), point3D_ids->end(), point3D_id) == point3D_ids->end()) {
     point3D_ids->push_back(point3D_id);
   }
 }
 
-}  // namespace
-
 std::vector<point3D_t> TrackedReconstruction::PointsOfTrack(track_t track_id) const {
   std::vector<point3D_t> point3D_ids;
   for (const TrackElement& element : graph_.TrackElements(track_id)) {
-    AddPointOf(*reconstruction_, element, &point3D_ids);
+    AddPointOf(element, &point3D_ids);
   }
   return point3D_ids;
 }
@@ -47,15 +56,15 @@ std::vector<point3D_t> TrackedReconstruction::PointsOfCorrespondences(
   std::vector<point3D_t> point3D_ids;
   for (const TrackElement& other :
        graph_.CorrespondencesOf(element.image_id, element.point2D_idx)) {
-    AddPointOf(*reconstruction_, other, &point3D_ids);
+    AddPointOf(other, &point3D_ids);
   }
   return point3D_ids;
 }
 
 bool TrackedReconstruction::IsFree(const TrackElement& element) const {
-  if (!reconstruction_->ExistsImage(element.image_id)) return false;
-  const Image& image = reconstruction_->GetImage(element.image_id);
-  return image.registered && !image.points2D[element.point2D_idx].HasPoint3D();
+  const Image* image = FindImage(element.image_id);
+  return image != nullptr && image->registered &&
+         !image->points2D[element.point2D_idx].HasPoint3D();
 }
 
 point3D_t TrackedReconstruction::AddPoint3D(const Eigen::Vector3d& xyz, Track track) {

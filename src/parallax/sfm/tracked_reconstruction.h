@@ -32,6 +32,9 @@ class TrackedReconstruction {
 
   // The keypoint is in a registered image and belongs to no point yet.
   bool IsFree(const TrackElement& element) const;
+  // The model's image with this id, or nullptr. Cached: the triangulator asks for images
+  // millions of times, and the model's images never move (std::map nodes) nor go away.
+  const Image* FindImage(image_t image_id) const;
 
   point3D_t AddPoint3D(const Eigen::Vector3d& xyz, Track track);
   void AddObservation(point3D_t point3D_id, const TrackElement& element);
@@ -40,12 +43,15 @@ class TrackedReconstruction {
   std::set<image_pair_t>& RetriangulatedPairs() { return retriangulated_pairs_; }
 
  private:
+  // Appends the point of a keypoint in a registered image, if it has one and is not listed.
+  void AddPointOf(const TrackElement& element, std::vector<point3D_t>* point3D_ids) const;
   void NotePoint(const TrackElement& element, point3D_t point3D_id);
 
   const CorrespondenceGraph& graph_;
   Reconstruction* reconstruction_;
   std::vector<point3D_t> track_point3D_;
   std::set<image_pair_t> retriangulated_pairs_;
+  mutable std::vector<const Image*> image_cache_;  // By image id; nullptr: not looked up yet.
 };
 
 }  // namespace parallax
