@@ -6,10 +6,10 @@
 #   bench/track_recovery.sh [DROP:WRONG ...]      # default: 0.3:0 0.3:0.05 0.5:0.1
 #
 # Per damage setting: build-X/bench/track_recovery make, then `parallax mapper` of this build
-# with its defaults and with completion, merging and re-triangulation off (--tri-complete-hops
-# 0 --tri-merge 0 --tri-retriangulate-ratio 0), then of PARALLAX_BASELINE_BINARY (an earlier
-# build, optional), then COLMAP 3.8's mapper when installed; each model scored by
-# track_recovery score. Needs -DPARALLAX_BUILD_BENCHMARKS=ON (the default).
+# with its defaults and with COLMAP's completion, merging and re-triangulation on
+# (--tri-complete-hops 5 --tri-merge 1 --tri-retriangulate-ratio 0.2), then of
+# PARALLAX_BASELINE_BINARY (an earlier build, optional), then COLMAP 3.8's mapper when
+# installed; each model scored by track_recovery score. Needs -DPARALLAX_BUILD_BENCHMARKS=ON (the default).
 # Results in ${PARALLAX_BENCH_OUT:-/tmp/parallax_track_recovery}/results.jsonl.
 set -euo pipefail
 bench_name=track_recovery
@@ -54,7 +54,7 @@ for setting in "${settings[@]}"; do
   scene="$out/drop${drop}_wrong${wrong}"
   "$tool" make "$scene" --drop "$drop" --wrong "$wrong"
   map parallax "$binary"
-  map parallax_tracks_only "$binary" --tri-complete-hops 0 --tri-merge 0 --tri-retriangulate-ratio 0
+  map parallax_completion "$binary" --tri-complete-hops 5 --tri-merge 1 --tri-retriangulate-ratio 0.2
   if [[ -n "${PARALLAX_BASELINE_BINARY:-}" ]]; then map baseline "$PARALLAX_BASELINE_BINARY"; fi
   if command -v colmap >/dev/null; then
     mkdir -p "$scene/colmap"
