@@ -66,8 +66,7 @@ void DamageVerifiedMatches(const Reconstruction& truth, const DamageOptions& opt
       if (draw < options.drop) continue;
       if (draw < options.drop + options.wrong) {
         const Point2D& true_match = image2.points2D[match.point2D_idx2];
-        const point2D_t other =
-            NearestOtherKeypoint(image2, true_match.xy, true_match.point3D_id);
+        const point2D_t other = NearestOtherKeypoint(image2, true_match.xy, true_match.point3D_id);
         if (other != kInvalidPoint2DIdx) damaged.push_back({match.point2D_idx1, other});
         continue;
       }
