@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "parallax/report/evaluation.h"
 #include "parallax/util/file.h"
 
 namespace parallax {
@@ -9,16 +10,6 @@ namespace parallax {
 namespace {
 nlohmann::json NumberOrNull(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
-
-// [{"length": 2, "points": N}, ...]: the lengths present, shortest first.
-nlohmann::json TrackLengthHistogramJson(const Reconstruction* model) {
-  nlohmann::json histogram = nlohmann::json::array();
-  if (model == nullptr) return histogram;
-  for (const auto& [length, count] : model->ComputeTrackLengthHistogram()) {
-    histogram.push_back({{"length", length}, {"points", count}});
-  }
-  return histogram;
 }
 
 }  // namespace
@@ -36,7 +27,8 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   summary["points3D"] = model ? model->NumPoints3D() : 0;
   summary["observations"] = model ? model->NumObservations() : 0;
   summary["mean_track_length"] = model ? model->ComputeMeanTrackLength() : 0.0;
-  summary["track_length_histogram"] = TrackLengthHistogramJson(model);
+  summary["track_length_histogram"] = TrackLengthHistogramToJson(
+      model ? model->ComputeTrackLengthHistogram() : std::map<size_t, size_t>());
   double mean_error = 0;
   if (model) {
     Reconstruction copy = *model;

@@ -110,6 +110,14 @@ void EvaluationOptions::Check() const {
   for (double threshold : center_thresholds_ratio) PARALLAX_CHECK_GT(threshold, 0.0);
 }
 
+nlohmann::json TrackLengthHistogramToJson(const std::map<size_t, size_t>& histogram) {
+  nlohmann::json bins = nlohmann::json::array();
+  for (const auto& [length, count] : histogram) {
+    bins.push_back({{"length", length}, {"points", count}});
+  }
+  return bins;
+}
+
 EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const GroundTruth& gt,
                                          const EvaluationOptions& options) {
   options.Check();
@@ -248,11 +256,7 @@ nlohmann::json MetricsToJson(const EvaluationMetrics& metrics) {
   json["points3D"] = metrics.num_points3D;
   json["observations"] = metrics.num_observations;
   json["mean_track_length"] = metrics.mean_track_length;
-  nlohmann::json histogram = nlohmann::json::array();
-  for (const auto& [length, count] : metrics.track_length_histogram) {
-    histogram.push_back({{"length", length}, {"points", count}});
-  }
-  json["track_length_histogram"] = histogram;
+  json["track_length_histogram"] = TrackLengthHistogramToJson(metrics.track_length_histogram);
   json["mean_reprojection_error_px"] = metrics.mean_reprojection_error_px;
   nlohmann::json images = nlohmann::json::array();
   for (const ImageEvaluation& image : metrics.images) {

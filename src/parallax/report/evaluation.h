@@ -93,6 +93,9 @@ struct EvaluationMetrics {
 
 // Compares a reconstruction with ground-truth poses. Images are matched by name: exactly,
 // else by file name without folder, else by name without folder and extension.
+// [{"length": 2, "points": N}, ...]: points by track length, shortest first.
+nlohmann::json TrackLengthHistogramToJson(const std::map<size_t, size_t>& histogram);
+
 EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const GroundTruth& gt,
                                          const EvaluationOptions& options = {});
 

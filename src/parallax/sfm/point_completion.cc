@@ -93,23 +93,19 @@ std::optional<Eigen::Vector3d> Refit(const Reconstruction& reconstruction, const
   return TriangulateMultiViewPoint(matrices, points);
 }
 
-// Replaces the two points by one at `xyz` with `elements`; returns its id.
+// Replaces the two points by one at `xyz` holding only `elements` (where both observed an
+// image, the other keypoint is let go); returns its id.
 point3D_t ReplaceByMerged(point3D_t point3D_id1, point3D_t point3D_id2, const Eigen::Vector3d& xyz,
                           const std::vector<TrackElement>& elements, TrackedReconstruction* model) {
+  const point3D_t merged = model->MergePoints3D(point3D_id1, point3D_id2);
   Reconstruction& reconstruction = model->Model();
-  const Point3D& point1 = reconstruction.GetPoint3D(point3D_id1);
-  const Point3D& point2 = reconstruction.GetPoint3D(point3D_id2);
-  const double weight1 = static_cast<double>(point1.track.Length());
-  const double weight2 = static_cast<double>(point2.track.Length());
-  const Eigen::Vector3d color =
-      (weight1 * point1.color.cast<double>() + weight2 * point2.color.cast<double>()) /
-      (weight1 + weight2);
-  reconstruction.DeletePoint3D(point3D_id1);
-  reconstruction.DeletePoint3D(point3D_id2);
-  Track track;
-  track.elements = elements;
-  const point3D_t merged = model->AddPoint3D(xyz, std::move(track));
-  reconstruction.GetPoint3D(merged).color = color.array().round().cast<uint8_t>();
+  const std::vector<TrackElement> all = reconstruction.GetPoint3D(merged).track.elements;
+  for (const TrackElement& element : all) {
+    if (std::find(elements.begin(), elements.end(), element) == elements.end()) {
+      reconstruction.DeleteObservation(element.image_id, element.point2D_idx);
+    }
+  }
+  reconstruction.GetPoint3D(merged).xyz = xyz;
   return merged;
 }
 

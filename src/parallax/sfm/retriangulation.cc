@@ -51,7 +51,7 @@ size_t RetriangulateUnderReconstructedPairs(const TrackTriangulationOptions& opt
         const track_t track_id = graph.TrackOf(element.image_id, element.point2D_idx);
         if (track_id != kInvalidTrackId) {
           tracks.insert(track_id);
-        } else if (ContinueKeypoint(relaxed, element, {}, model)) {
+        } else if (ContinueKeypoint(relaxed, element, {}, model) != kInvalidPoint3DId) {
           ++num_added;
         }
       }

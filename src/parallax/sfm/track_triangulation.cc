@@ -141,8 +141,8 @@ point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t tra
   return model->AddPoint3D(*refined, std::move(track));
 }
 
-bool ContinueKeypoint(const TrackTriangulationOptions& options, const TrackElement& element,
-                      const std::vector<point3D_t>& candidates, TrackedReconstruction* model) {
+point3D_t ContinueKeypoint(const TrackTriangulationOptions& options, const TrackElement& element,
+                           const std::vector<point3D_t>& candidates, TrackedReconstruction* model) {
   std::vector<point3D_t> point3D_ids = model->PointsOfCorrespondences(element);
   point3D_ids.insert(point3D_ids.end(), candidates.begin(), candidates.end());
   const Reconstruction& reconstruction = model->Model();
@@ -159,9 +159,8 @@ bool ContinueKeypoint(const TrackTriangulationOptions& options, const TrackEleme
       best_error = error;
     }
   }
-  if (best == kInvalidPoint3DId) return false;
-  model->AddObservation(best, element);
-  return true;
+  if (best != kInvalidPoint3DId) model->AddObservation(best, element);
+  return best;
 }
 
 size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
@@ -175,11 +174,10 @@ size_t ContinueTrack(const TrackTriangulationOptions& options, track_t track_id,
       track_points = model->PointsOfTrack(track_id);
       listed = true;
     }
-    if (ContinueKeypoint(options, element, track_points, model)) {
+    const point3D_t point3D_id = ContinueKeypoint(options, element, track_points, model);
+    if (point3D_id != kInvalidPoint3DId) {
       ++num_added;
       // A point new to the track (from a correspondence) is a candidate for the rest.
-      const point3D_t point3D_id =
-          model->Model().GetImage(element.image_id).points2D[element.point2D_idx].point3D_id;
       if (std::find(track_points.begin(), track_points.end(), point3D_id) == track_points.end()) {
         track_points.push_back(point3D_id);
       }
@@ -208,7 +206,7 @@ size_t TriangulateImage(const TrackTriangulationOptions& options, image_t image_
     if (track_id != kInvalidTrackId) {
       num_added += ContinueOrTriangulateTrack(options, track_id, model);
     } else if (model->IsFree({image_id, idx}) &&
-               ContinueKeypoint(options, {image_id, idx}, {}, model)) {
+               ContinueKeypoint(options, {image_id, idx}, {}, model) != kInvalidPoint3DId) {
       ++num_added;
     }
   }

@@ -40,9 +40,9 @@ point3D_t TriangulateTrack(const TrackTriangulationOptions& options, track_t tra
 
 // Adds a free keypoint to the point it fits best among `candidates` and the points of its
 // correspondences, when one that does not observe its image yet reprojects within the
-// threshold. Returns whether it was added.
-bool ContinueKeypoint(const TrackTriangulationOptions& options, const TrackElement& element,
-                      const std::vector<point3D_t>& candidates, TrackedReconstruction* model);
+// threshold. Returns that point, or kInvalidPoint3DId when none fits.
+point3D_t ContinueKeypoint(const TrackTriangulationOptions& options, const TrackElement& element,
+                           const std::vector<point3D_t>& candidates, TrackedReconstruction* model);
 
 // ContinueKeypoint for every free element of the track, with the track's points as
 // candidates. Returns the number of observations added.

@@ -78,6 +78,14 @@ void TrackedReconstruction::AddObservation(point3D_t point3D_id, const TrackElem
   NotePoint(element, point3D_id);
 }
 
+point3D_t TrackedReconstruction::MergePoints3D(point3D_t point3D_id1, point3D_t point3D_id2) {
+  const point3D_t merged = reconstruction_->MergePoints3D(point3D_id1, point3D_id2);
+  for (const TrackElement& element : reconstruction_->GetPoint3D(merged).track.elements) {
+    NotePoint(element, merged);
+  }
+  return merged;
+}
+
 void TrackedReconstruction::NotePoint(const TrackElement& element, point3D_t point3D_id) {
   const track_t track_id = graph_.TrackOf(element.image_id, element.point2D_idx);
   if (track_id != kInvalidTrackId) track_point3D_[track_id] = point3D_id;

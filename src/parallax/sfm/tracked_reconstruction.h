@@ -38,6 +38,8 @@ class TrackedReconstruction {
 
   point3D_t AddPoint3D(const Eigen::Vector3d& xyz, Track track);
   void AddObservation(point3D_t point3D_id, const TrackElement& element);
+  // Reconstruction::MergePoints3D, the merged point noted for its elements' tracks.
+  point3D_t MergePoints3D(point3D_t point3D_id1, point3D_t point3D_id2);
 
   // Image pairs already re-triangulated (each is, at most once).
   std::set<image_pair_t>& RetriangulatedPairs() { return retriangulated_pairs_; }
