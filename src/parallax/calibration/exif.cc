@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "parallax/util/check.h"
+#include "parallax/util/file.h"
 
 namespace parallax {
 namespace {
@@ -377,7 +378,7 @@ std::optional<ExifData> ParseJpegExif(std::string_view jpeg) {
 
 std::optional<ExifData> ReadExif(const std::filesystem::path& path) {
   std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw InputError(path.string() + ": cannot open for reading");
+  if (!stream) ThrowCannotOpenForReading(path);
   std::string head(kMaxExifHeadBytes, '\0');
   stream.read(head.data(), static_cast<std::streamsize>(head.size()));
   if (stream.bad()) throw InputError(path.string() + ": read failed");

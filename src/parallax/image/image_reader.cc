@@ -397,6 +397,9 @@ Bitmap DecodeBitmap(std::string_view bytes, const std::filesystem::path& source,
 std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& dir,
                                                   std::vector<RejectedImageFile>* rejected) {
   std::error_code error;
+  if (!std::filesystem::exists(dir, error)) {
+    throw MissingFileError(dir.string() + ": no such folder");
+  }
   if (!std::filesystem::is_directory(dir, error)) {
     throw InputError(dir.string() + ": not a directory");
   }

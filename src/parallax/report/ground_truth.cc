@@ -231,7 +231,7 @@ GroundTruth ReadGroundTruth(const std::filesystem::path& path) {
   std::error_code error;
   if (std::filesystem::is_regular_file(path, error)) return ReadMiddleburyGroundTruth(path);
   if (!std::filesystem::is_directory(path, error)) {
-    throw InputError(path.string() + ": no such file or folder");
+    throw MissingFileError(path.string() + ": no such file or folder");
   }
   if (std::filesystem::exists(path / "cameras.bin", error) ||
       std::filesystem::exists(path / "cameras.txt", error)) {

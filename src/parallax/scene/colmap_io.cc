@@ -603,7 +603,7 @@ template <typename ReadFunction>
 void ReadFile(const std::filesystem::path& path, ReadFunction read,
               Reconstruction* reconstruction) {
   std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw InputError(path.string() + ": cannot open for reading");
+  if (!stream) ThrowCannotOpenForReading(path);
   read(stream, path.string(), reconstruction);
 }
 
@@ -637,6 +637,9 @@ void WriteReconstructionBinary(const Reconstruction& reconstruction,
 Reconstruction ReadReconstruction(const std::filesystem::path& dir) {
   Reconstruction reconstruction;
   std::error_code error;
+  if (!std::filesystem::exists(dir, error)) {
+    throw MissingFileError(dir.string() + ": model folder does not exist");
+  }
   if (std::filesystem::exists(dir / "cameras.bin", error)) {
     ReadFile(dir / "cameras.bin", ReadCamerasBinary, &reconstruction);
     ReadFile(dir / "images.bin", ReadImagesBinary, &reconstruction);

@@ -295,7 +295,11 @@ TEST(ColmapIo, ReadReconstructionPrefersBinary) {
   ExpectSameModel(reconstruction, ReadReconstruction(temp.path()));
 
   ExpectInputError([&] { ReadReconstruction(temp.path() / "missing"); },
-                   (temp.path() / "missing").string(), "no COLMAP model");
+                   (temp.path() / "missing").string(), "model folder does not exist");
+  EXPECT_THROW(ReadReconstruction(temp.path() / "missing"), MissingFileError);
+  std::filesystem::create_directory(temp.path() / "empty");
+  ExpectInputError([&] { ReadReconstruction(temp.path() / "empty"); },
+                   (temp.path() / "empty").string(), "no COLMAP model");
   std::filesystem::remove(temp.path() / "images.bin");
   ExpectInputError([&] { ReadReconstruction(temp.path()); }, (temp.path() / "images.bin").string(),
                    "cannot open");

@@ -19,6 +19,13 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Bad input of one kind: a file or folder the user named does not exist (the Python module
+// raises FileNotFoundError for it, ValueError for other input errors).
+class MissingFileError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 namespace internal {
 [[noreturn]] void ThrowCheckError(const char* file, int line, const char* expression,
                                   const std::string& message);

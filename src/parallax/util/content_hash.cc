@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "parallax/util/check.h"
+#include "parallax/util/file.h"
 
 namespace parallax {
 namespace {
@@ -37,7 +38,7 @@ std::string HashBytes(std::string_view bytes) {
 
 std::string HashFile(const std::filesystem::path& path) {
   std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw InputError(path.string() + ": cannot open for reading");
+  if (!stream) ThrowCannotOpenForReading(path);
   const std::unique_ptr<XXH3_state_t, StateDeleter> state(XXH3_createState());
   PARALLAX_CHECK(state != nullptr);
   XXH3_128bits_reset(state.get());

@@ -47,11 +47,19 @@ void WriteTextFileAtomically(const std::filesystem::path& path, const std::strin
 
 std::string ReadFileToString(const std::filesystem::path& path) {
   std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw InputError(path.string() + ": cannot open for reading");
+  if (!stream) ThrowCannotOpenForReading(path);
   std::ostringstream buffer;
   buffer << stream.rdbuf();
   if (stream.bad()) throw InputError(path.string() + ": read failed");
   return buffer.str();
+}
+
+void ThrowCannotOpenForReading(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::exists(path, error) && !error) {
+    throw MissingFileError(path.string() + ": cannot open for reading: no such file");
+  }
+  throw InputError(path.string() + ": cannot open for reading");
 }
 
 std::vector<std::string> SplitLines(const std::string& text) {

@@ -18,6 +18,10 @@ void WriteTextFileAtomically(const std::filesystem::path& path, const std::strin
 // Reads a whole file; throws InputError naming the path on failure.
 std::string ReadFileToString(const std::filesystem::path& path);
 
+// Throws "<path>: cannot open for reading", as MissingFileError when nothing is there and as
+// InputError otherwise (a folder, no permission).
+[[noreturn]] void ThrowCannotOpenForReading(const std::filesystem::path& path);
+
 // Splits text into lines, dropping '\r' (Windows line endings in the datasets' text files).
 std::vector<std::string> SplitLines(const std::string& text);
 

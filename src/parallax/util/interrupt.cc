@@ -43,6 +43,6 @@ void ThrowIfInterrupted(const std::string& what_was_kept) {
   if (signal_number != 0) throw Interrupted(signal_number, what_was_kept);
 }
 
-void SetPendingInterruptSignalForTesting(int signal_number) { pending_signal.store(signal_number); }
+void SetPendingInterruptSignal(int signal_number) { pending_signal.store(signal_number); }
 
 }  // namespace parallax

@@ -33,7 +33,9 @@ class Interrupted : public std::runtime_error {
 // Throws Interrupted(signal, what_was_kept) when a signal is pending.
 void ThrowIfInterrupted(const std::string& what_was_kept);
 
-// For tests: records `signal_number` as if it had been received (0 clears it).
-void SetPendingInterruptSignalForTesting(int signal_number);
+// Records `signal_number` as if it had been received (0 clears it): how a host that owns the
+// signals itself stops a run at its next safe point (the Python module, where Python's own
+// handler receives Ctrl-C), and how tests simulate a signal.
+void SetPendingInterruptSignal(int signal_number);
 
 }  // namespace parallax

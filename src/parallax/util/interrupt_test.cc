@@ -8,9 +8,9 @@ namespace parallax {
 namespace {
 
 TEST(Interrupt, PendingSignalThrowsWithWhatWasKeptAndTheShellsExitStatus) {
-  SetPendingInterruptSignalForTesting(0);
+  SetPendingInterruptSignal(0);
   EXPECT_NO_THROW(ThrowIfInterrupted("nothing"));
-  SetPendingInterruptSignalForTesting(SIGINT);
+  SetPendingInterruptSignal(SIGINT);
   try {
     ThrowIfInterrupted("features of 3 images stored");
     FAIL() << "no exception";
@@ -19,13 +19,13 @@ TEST(Interrupt, PendingSignalThrowsWithWhatWasKeptAndTheShellsExitStatus) {
     EXPECT_EQ(interrupted.signal_number(), SIGINT);
     EXPECT_EQ(interrupted.ExitStatus(), 130);
   }
-  SetPendingInterruptSignalForTesting(SIGTERM);
+  SetPendingInterruptSignal(SIGTERM);
   try {
     ThrowIfInterrupted("");
   } catch (const Interrupted& interrupted) {
     EXPECT_EQ(interrupted.ExitStatus(), 143);
   }
-  SetPendingInterruptSignalForTesting(0);
+  SetPendingInterruptSignal(0);
 }
 
 // In a child process (a death test): the first signal is recorded and the process goes on;

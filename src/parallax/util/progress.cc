@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <sstream>
+#include <utility>
 
 #include "parallax/util/logging.h"
 
@@ -15,7 +17,24 @@ namespace {
 constexpr double kTerminalIntervalSeconds = 0.1;
 constexpr double kPlainIntervalSeconds = 10.0;
 constexpr size_t kPlainBuckets = 20;  // 5 % steps.
+
+std::mutex listener_mutex;
+// Shared so that a count being reported keeps its listener alive while it is replaced.
+std::shared_ptr<const ProgressListener> listener;
+
+std::shared_ptr<const ProgressListener> CurrentListener() {
+  std::lock_guard<std::mutex> lock(listener_mutex);
+  return listener;
+}
 }  // namespace
+
+ProgressListener SetProgressListener(ProgressListener new_listener) {
+  std::shared_ptr<const ProgressListener> replacement;
+  if (new_listener) replacement = std::make_shared<const ProgressListener>(std::move(new_listener));
+  std::lock_guard<std::mutex> lock(listener_mutex);
+  std::shared_ptr<const ProgressListener> previous = std::exchange(listener, replacement);
+  return previous ? *previous : ProgressListener();
+}
 
 ProgressReporter::ProgressReporter(std::string label, size_t total)
     : ProgressReporter(std::move(label), total, &std::cerr, isatty(fileno(stderr)) != 0) {}
@@ -38,8 +57,20 @@ size_t ProgressReporter::Done() const {
 }
 
 void ProgressReporter::Increment(size_t count) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  done_ += count;
+  size_t done = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ += count;
+    done = done_;
+    MaybePrintLocked();
+  }
+  // Outside the lock: the listener may take its own locks (the Python module's queue).
+  if (const std::shared_ptr<const ProgressListener> current = CurrentListener()) {
+    (*current)(label_, done, total_);
+  }
+}
+
+void ProgressReporter::MaybePrintLocked() {
   if (!enabled_ || finished_) return;
   const Clock::time_point now = Clock::now();
   const double since_print = std::chrono::duration<double>(now - last_print_).count();

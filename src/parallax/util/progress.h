@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <iosfwd>
 #include <mutex>
 #include <string>
@@ -11,6 +12,13 @@ namespace parallax {
 // Progress of a long stage on stderr: "label: done/total (rate/s, ETA Ns)". On a terminal
 // the line is rewritten in place with '\r'; otherwise (logs, pipes) a plain line is printed
 // every ~5 % or 10 s. Silent when the log level is above Info. Increment() is thread-safe.
+// Told of every ProgressReporter's count as it changes (label, done, total), from whichever
+// thread counted; on top of the stderr line. The Python module passes the counts to a
+// callback. Empty: none.
+using ProgressListener = std::function<void(const std::string& label, size_t done, size_t total)>;
+// Replaces the process-wide listener; returns the previous one.
+ProgressListener SetProgressListener(ProgressListener listener);
+
 class ProgressReporter {
  public:
   ProgressReporter(std::string label, size_t total);
@@ -27,6 +35,7 @@ class ProgressReporter {
 
  private:
   using Clock = std::chrono::steady_clock;
+  void MaybePrintLocked();
   void PrintLocked(bool final_line);
 
   std::string label_;

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <mutex>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
@@ -80,6 +83,35 @@ TEST_F(ProgressTest, IncrementIsThreadSafe) {
   const std::vector<std::string> lines = SplitLines(stream.str());
   EXPECT_EQ(lines.size(), 20u);
   EXPECT_EQ(lines.back().rfind("pairs: 10000/10000 (", 0), 0u);
+}
+
+TEST_F(ProgressTest, ListenerSeesEveryCountFromEveryThread) {
+  std::mutex mutex;
+  std::vector<size_t> counts;
+  const ProgressListener previous =
+      SetProgressListener([&](const std::string& label, size_t done, size_t total) {
+        EXPECT_EQ(label, "pairs");
+        EXPECT_EQ(total, 1000u);
+        std::lock_guard<std::mutex> lock(mutex);
+        counts.push_back(done);
+      });
+  EXPECT_FALSE(previous);
+  std::ostringstream stream;
+  {
+    ProgressReporter progress("pairs", 1000, &stream, /*is_terminal=*/false);
+    ParallelFor(0, 1000, 4, [&](size_t) { progress.Increment(); });
+  }
+  // Also with the stderr line silenced: the listener is not a log.
+  SetLogLevel(LogLevel::kWarning);
+  ProgressReporter("pairs", 1000, &stream, false).Increment(1000);
+  SetLogLevel(LogLevel::kInfo);
+  // Replaced by nothing, the listener hears no more.
+  EXPECT_TRUE(SetProgressListener(previous));
+  ProgressReporter("pairs", 1000, &stream, false).Increment();
+  ASSERT_EQ(counts.size(), 1001u);
+  std::sort(counts.begin(), counts.end() - 1);
+  for (size_t i = 0; i < 1000; ++i) EXPECT_EQ(counts[i], i + 1);
+  EXPECT_EQ(counts.back(), 1000u);
 }
 
 }  // namespace
