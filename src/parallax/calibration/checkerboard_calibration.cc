@@ -1,11 +1,13 @@
 #include "parallax/calibration/checkerboard_calibration.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cfloat>
 #include <cmath>
 #include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "parallax/calibration/exif.h"
 #include "parallax/image/image_reader.h"
@@ -387,6 +389,21 @@ CalibratedCamera CalibratedCameraFromResult(const CheckerboardCalibrationResult&
   calibrated.rms_error = result.rms_error;
   calibrated.num_images = result.num_used_images;
   return calibrated;
+}
+
+std::vector<std::filesystem::path> ListCalibrationImages(const std::filesystem::path& dir) {
+  static const std::set<std::string> kExtensions = {".jpg", ".jpeg", ".png",
+                                                    ".tif", ".tiff", ".bmp"};
+  std::vector<std::filesystem::path> paths;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (!entry.is_regular_file()) continue;
+    std::string extension = entry.path().extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    if (kExtensions.count(extension)) paths.push_back(entry.path());
+  }
+  std::sort(paths.begin(), paths.end());
+  return paths;
 }
 
 }  // namespace parallax

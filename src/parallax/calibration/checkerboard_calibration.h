@@ -108,6 +108,10 @@ CheckerboardCalibrationResult CalibrateFromCheckerboards(
     const CheckerboardCalibrationOptions& options,
     const std::vector<std::filesystem::path>& image_paths);
 
+// The photos of a calibration folder: files named .jpg, .jpeg, .png, .tif, .tiff or .bmp (any
+// case; decoding tells the rest), sorted by name.
+std::vector<std::filesystem::path> ListCalibrationImages(const std::filesystem::path& dir);
+
 // The result as a camera.json record.
 CalibratedCamera CalibratedCameraFromResult(const CheckerboardCalibrationResult& result);
 

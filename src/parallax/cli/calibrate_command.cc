@@ -1,10 +1,8 @@
 // parallax calibrate: intrinsics from photos of a printed chessboard, written to camera.json.
 #include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -16,22 +14,6 @@
 
 namespace parallax::cli {
 namespace {
-
-// Image files of `dir` by extension (decoding tells the rest), sorted by name.
-std::vector<std::filesystem::path> ListCalibrationImages(const std::filesystem::path& dir) {
-  static const std::set<std::string> kExtensions = {".jpg", ".jpeg", ".png",
-                                                    ".tif", ".tiff", ".bmp"};
-  std::vector<std::filesystem::path> paths;
-  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
-    if (!entry.is_regular_file()) continue;
-    std::string extension = entry.path().extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
-    if (kExtensions.count(extension)) paths.push_back(entry.path());
-  }
-  std::sort(paths.begin(), paths.end());
-  return paths;
-}
 
 void PrintImages(const CheckerboardCalibrationResult& result) {
   std::vector<const CheckerboardImageResult*> used, skipped;

@@ -3,9 +3,7 @@
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/cli/pipeline_options_cli.h"
-#include "parallax/pipeline/extraction_stage.h"
-#include "parallax/util/check.h"
-#include "parallax/util/run_lock.h"
+#include "parallax/pipeline/database_stages.h"
 
 namespace parallax::cli {
 
@@ -23,10 +21,8 @@ int RunFeatures(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    Database database(database_path);
-    const RunLock lock(DatabaseLockPath(database_path), database_path);
-    const ExtractionStageResult stats = RunExtractionStage(options, image_dir, &database);
-    if (stats.num_images_found == 0) throw InputError(image_dir + ": no images found");
+    const ExtractionStageResult stats =
+        ExtractFeaturesIntoDatabase(options, image_dir, database_path);
     std::cout << "features: " << stats.num_images_found << " images, " << stats.num_extracted
               << " extracted, " << stats.num_skipped << " already in the database, "
               << stats.failed.size() << " failed; mean "

@@ -3,11 +3,8 @@
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/cli/mapper_options_cli.h"
-#include "parallax/pipeline/run_summary.h"
+#include "parallax/pipeline/database_stages.h"
 #include "parallax/util/check.h"
-#include "parallax/util/file.h"
-#include "parallax/util/run_lock.h"
-#include "parallax/util/timer.h"
 
 namespace parallax::cli {
 
@@ -36,23 +33,12 @@ int RunMapper(int argc, char** argv) {
           "--cluster maps one cluster incrementally; it cannot be combined with "
           "--mapper hierarchical");
     }
-    if (!std::filesystem::exists(database_path)) {
-      throw InputError(database_path + ": database does not exist");
-    }
-    CreateDirectoryOrThrow(output);
-    const RunLock output_lock(OutputLockPath(output), output);
-    Database database(database_path);
-    const RunLock database_lock(DatabaseLockPath(database_path), database_path);
-    Timer timer;
-    MappingStageResult result = RunMappingStage(options, database, image_path, output);
-    const StageTimings timings = {{"mapping", timer.ElapsedSeconds()}};
+    const MappingStageResult result = MapDatabase(options, database_path, image_path, output);
     PrintMappingResult(result, output);
     if (result.models.empty()) {
       std::cerr << "error: no model could be started: " << result.summary.failure << std::endl;
       return 1;
     }
-    WriteRunSummary(BuildRunSummary(result, timings),
-                    std::filesystem::path(output) / "summary.json");
     return 0;
   });
 }

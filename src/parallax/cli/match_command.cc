@@ -5,10 +5,8 @@
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/cli/pipeline_options_cli.h"
-#include "parallax/pipeline/matching_stage.h"
+#include "parallax/pipeline/database_stages.h"
 #include "parallax/pipeline/run_summary.h"
-#include "parallax/util/check.h"
-#include "parallax/util/run_lock.h"
 
 namespace parallax::cli {
 namespace {
@@ -82,14 +80,9 @@ int RunMatch(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    if (!std::filesystem::exists(database_path)) {
-      throw InputError(database_path + ": database does not exist (run parallax features)");
-    }
-    Database database(database_path);
-    const RunLock lock(DatabaseLockPath(database_path), database_path);
-    const MatchingStageResult stats = RunMatchingStage(options, &database);
+    const MatchingStageResult stats = MatchDatabase(options, database_path);
     if (print_stats) {
-      PrintStatsTables(database);
+      PrintStatsTables(Database(database_path));
       std::cout << MatchingSummary(stats).dump(2) << "\n";
     }
     std::cout << "match: " << stats.num_pairs << " pairs, " << stats.num_matched << " matched, "

@@ -34,18 +34,8 @@ int RunReconstruct(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    options.matching.geometry.ransac.random_seed = seed;
-    options.mapping.mapper.absolute_pose.ransac.random_seed = seed;
-    options.mapping.hierarchical.num_threads = num_threads;
+    SetSeedAndThreads(seed, num_threads, app.count("--ba-threads") > 0, &options);
     options.database_path = database_path;
-    options.extraction.num_threads = num_threads;
-    options.matching.num_threads = num_threads;
-    // --ba-threads, when given, overrides --threads for bundle adjustment.
-    if (app.count("--ba-threads") == 0) {
-      for (BundleAdjustmentOptions* ba : options.mapping.mapper.BundleAdjustments()) {
-        ba->num_threads = num_threads;
-      }
-    }
     const ReconstructionPipelineResult result =
         RunReconstructionPipeline(options, image_dir, output_dir);
     PrintMappingResult(result.mapping, output_dir);

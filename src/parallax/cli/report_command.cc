@@ -2,13 +2,7 @@
 
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
-#include "parallax/report/evaluation.h"
-#include "parallax/report/ground_truth.h"
-#include "parallax/report/html_report.h"
-#include "parallax/scene/colmap_io.h"
-#include "parallax/util/check.h"
-#include "parallax/util/file.h"
-#include "parallax/util/logging.h"
+#include "parallax/report/report_folder.h"
 
 namespace parallax::cli {
 
@@ -27,58 +21,13 @@ int RunReport(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    const fs::path out = output;
-    if (!fs::is_directory(out)) throw InputError(output + ": output folder does not exist");
-    const fs::path model_dir = model_path.empty() ? out / "sparse" / "0" : fs::path(model_path);
-    if (!fs::is_directory(model_dir)) throw InputError(model_dir.string() + ": no model");
-    const Reconstruction model = ReadReconstruction(model_dir);
-
-    HtmlReportInputs inputs;
-    inputs.reconstruction = &model;
-    const fs::path summary_path = out / "summary.json";
-    if (fs::exists(summary_path)) {
-      try {
-        inputs.summary = nlohmann::json::parse(ReadFileToString(summary_path));
-      } catch (const nlohmann::json::exception& error) {
-        throw InputError(summary_path.string() + ": " + error.what());
-      }
-    } else {
-      PARALLAX_LOG(Warning) << summary_path.string() << " missing: no timings or per-image errors";
-    }
-
-    std::unique_ptr<Database> database;
-    const fs::path db_path = database_path.empty() ? out / "database.db" : fs::path(database_path);
-    if (fs::exists(db_path)) {
-      database = std::make_unique<Database>(db_path);
-      inputs.database = database.get();
-    } else if (!database_path.empty()) {
-      throw InputError(database_path + ": database does not exist");
-    } else {
-      PARALLAX_LOG(Warning) << db_path.string() << " missing: no keypoint or match statistics";
-    }
-
-    if (!image_path.empty()) {
-      if (!fs::is_directory(image_path))
-        throw InputError(image_path + ": image folder does not exist");
-      inputs.image_dir = image_path;
-    } else if (inputs.summary.is_object() && inputs.summary.contains("image_path") &&
-               inputs.summary["image_path"].is_string() &&
-               fs::is_directory(inputs.summary["image_path"].get<std::string>())) {
-      inputs.image_dir = inputs.summary["image_path"].get<std::string>();
-    } else if (fs::is_directory(out / "images")) {
-      inputs.image_dir = out / "images";
-    } else {
-      PARALLAX_LOG(Warning) << "no image folder (use --images): the report shows no pictures";
-    }
-
-    if (!gt_path.empty()) {
-      inputs.evaluation = EvaluateReconstruction(model, ReadGroundTruth(gt_path));
-    }
-    fs::path normalized = fs::absolute(out).lexically_normal();
-    if (normalized.filename().empty()) normalized = normalized.parent_path();
-    inputs.title = "Parallax report: " + normalized.filename().string();
-    const fs::path report_path = out / "report.html";
-    WriteHtmlReport(inputs, report_path);
+    ReportFolderOptions options;
+    options.output_dir = output;
+    options.model_dir = model_path;
+    options.database_path = database_path;
+    options.image_dir = image_path;
+    options.ground_truth_path = gt_path;
+    const fs::path report_path = WriteReportOfOutputFolder(options);
     std::cout << "Wrote " << report_path.string() << " (" << fs::file_size(report_path) / 1024
               << " KiB)" << std::endl;
     return 0;

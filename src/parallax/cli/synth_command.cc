@@ -71,9 +71,7 @@ int RunSynth(int argc, char** argv) {
   return RunCommand(app, argc, argv, flags, [&] {
     options.layout = SyntheticSceneLayoutFromName(layout);
     if (!image_size.empty()) ParseDimensions(image_size, &options.width, &options.height);
-    options.antialiasing = antialiasing == "none"      ? Antialiasing::kNone
-                           : antialiasing == "grid3x3" ? Antialiasing::kGrid3x3
-                                                       : Antialiasing::kQuincunx;
+    options.antialiasing = AntialiasingFromName(antialiasing);
     options.shadows = !no_shadows;
     const Timer timer;
     const Reconstruction views = GenerateSyntheticScene(options, output_dir);

@@ -17,12 +17,25 @@ void ReconstructionPipelineOptions::Check() const {
   mapping.Check();
 }
 
+void SetSeedAndThreads(uint64_t seed, int num_threads, bool keep_ba_threads,
+                       ReconstructionPipelineOptions* options) {
+  options->matching.geometry.ransac.random_seed = seed;
+  options->mapping.mapper.absolute_pose.ransac.random_seed = seed;
+  options->extraction.num_threads = num_threads;
+  options->matching.num_threads = num_threads;
+  options->mapping.hierarchical.num_threads = num_threads;
+  if (keep_ba_threads) return;
+  for (BundleAdjustmentOptions* ba : options->mapping.mapper.BundleAdjustments()) {
+    ba->num_threads = num_threads;
+  }
+}
+
 ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipelineOptions& options,
                                                        const std::filesystem::path& image_dir,
                                                        const std::filesystem::path& output_dir) {
   options.Check();
   if (!std::filesystem::is_directory(image_dir)) {
-    throw InputError(image_dir.string() + ": image folder does not exist");
+    throw MissingFileError(image_dir.string() + ": image folder does not exist");
   }
   // Input that cannot work is refused before anything is created or written.
   const size_t num_image_files = ListImageFiles(image_dir).size();

@@ -38,6 +38,12 @@ struct ReconstructionPipelineResult {
   bool Success() const { return !mapping.models.empty(); }
 };
 
+// The run-wide --seed and --threads of `parallax reconstruct`: the seed of verification and
+// registration, the worker threads of every stage, bundle adjustment's too unless
+// `keep_ba_threads` (--ba-threads was given).
+void SetSeedAndThreads(uint64_t seed, int num_threads, bool keep_ba_threads,
+                       ReconstructionPipelineOptions* options);
+
 // The paper's pipeline end to end, each stage one call, timed and logged:
 //   1. SIFT features of every image            (skips images already in the database)
 //   2. matching of the selected pairs + 3. geometric verification (skips verified pairs)

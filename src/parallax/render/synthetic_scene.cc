@@ -185,6 +185,13 @@ SyntheticSceneOptions::Layout SyntheticSceneLayoutFromName(const std::string& na
   throw InputError("unknown layout '" + name + "' (expected ring, hemisphere, sequence or aerial)");
 }
 
+Antialiasing AntialiasingFromName(const std::string& name) {
+  if (name == "none") return Antialiasing::kNone;
+  if (name == "quincunx") return Antialiasing::kQuincunx;
+  if (name == "grid3x3") return Antialiasing::kGrid3x3;
+  throw InputError("unknown antialiasing '" + name + "' (expected none, quincunx or grid3x3)");
+}
+
 SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& options) {
   SceneModelOptions scene_options;
   scene_options.seed = options.seed;

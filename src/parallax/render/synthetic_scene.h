@@ -61,6 +61,9 @@ struct SyntheticSceneOptions {
 // Parses "ring", "hemisphere", "sequence" or "aerial"; throws InputError otherwise.
 SyntheticSceneOptions::Layout SyntheticSceneLayoutFromName(const std::string& name);
 
+// Parses "none", "quincunx" or "grid3x3"; throws InputError otherwise.
+Antialiasing AntialiasingFromName(const std::string& name);
+
 // The scene for these options (one temple, or a row long enough for the sequence).
 SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& options);
 
