@@ -13,6 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium
   clang-format-14
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 )
 # Extra packages for optional checks, installed when asked: PARALLAX_EXTRA_DEPS=1.
 if [[ "${PARALLAX_EXTRA_DEPS:-0}" == "1" ]]; then

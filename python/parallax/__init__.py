@@ -1,0 +1,60 @@
+"""Parallax: incremental Structure from Motion, from Python.
+
+The pipeline, one call per step (keyword options are the command line's flags, '_' for '-'):
+
+    import parallax
+    parallax.extract_features("photos/", "run/database.db")
+    parallax.match("run/database.db", pairs="exhaustive")
+    models = parallax.map("run/database.db", "photos/", "run/")
+    # or all at once:
+    result = parallax.reconstruct("photos/", "run/", intrinsics="K.txt")
+    model = result.models[0]
+    model.projection_centers()        # N x 3, no Python loop
+    model.point3D_xyz()               # M x 3
+
+Everything runs in Parallax's C++ core (the extension module parallax._parallax); long calls
+release the GIL, report progress through `progress=callable(stage, done, total)` and stop
+cleanly on Ctrl-C. Bad input raises ValueError, a missing file FileNotFoundError, each with
+the command line's one-line message.
+"""
+
+from ._parallax import (  # noqa: F401
+    Camera,
+    CameraMap,
+    EstimationResult,
+    ExtractionResult,
+    Image,
+    ImageMap,
+    MatchResult,
+    Point3D,
+    Point3DMap,
+    Reconstruction,
+    ReconstructionResult,
+    Rigid3d,
+    Track,
+    TrackElement,
+    calibrate,
+    dlt_resection,
+    estimate_absolute_pose,
+    estimate_essential_matrix,
+    estimate_fundamental_matrix,
+    estimate_homography,
+    evaluate,
+    extract_features,
+    extract_sift,
+    read_image,
+    map,
+    match,
+    reconstruct,
+    set_log_level,
+    synthesize,
+    triangulate_points,
+    write_report,
+)
+
+__version__ = "0.1.0"
+
+
+def read_model(path):
+    """Reads a COLMAP model folder (cameras/images/points3D, .bin or .txt)."""
+    return Reconstruction.read(path)
