@@ -73,23 +73,15 @@ RansacReport<typename Estimator::M_t> RunRansac(const RansacOptions& options,
   return LoRansac<Estimator, LocalEstimator>(options).Estimate(x, y);
 }
 
-py::object EstimateFundamental(const py::array& points1, const py::array& points2, double max_error,
-                               double confidence, int max_num_trials, uint64_t seed) {
+// F or H from pixel correspondences: the same arrays in, the same result out.
+template <typename Estimator, typename LocalEstimator>
+py::object EstimateFromPixelPairs(const py::array& points1, const py::array& points2,
+                                  double max_error, double confidence, int max_num_trials,
+                                  uint64_t seed) {
   const auto x1 = ToPoints2D(points1, "points1");
   const auto x2 = ToPoints2D(points2, "points2");
   RequireSameLength(x1.size(), x2.size(), "points1, points2");
-  const auto report =
-      RunRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>(
-          MakeRansacOptions(max_error, confidence, max_num_trials, seed), x1, x2);
-  return ToResult(report, x1.size());
-}
-
-py::object EstimateHomography(const py::array& points1, const py::array& points2, double max_error,
-                              double confidence, int max_num_trials, uint64_t seed) {
-  const auto x1 = ToPoints2D(points1, "points1");
-  const auto x2 = ToPoints2D(points2, "points2");
-  RequireSameLength(x1.size(), x2.size(), "points1, points2");
-  const auto report = RunRansac<HomographyMatrixEstimator, HomographyMatrixEstimator>(
+  const auto report = RunRansac<Estimator, LocalEstimator>(
       MakeRansacOptions(max_error, confidence, max_num_trials, seed), x1, x2);
   return ToResult(report, x1.size());
 }
@@ -226,13 +218,16 @@ void BindGeometry(py::module_& m) {
       });
 
   const auto [max_error4, confidence, trials, seed] = RansacArgs(4.0);
-  m.def("estimate_fundamental_matrix", &EstimateFundamental, py::arg("points1"), py::arg("points2"),
-        py::kw_only(), max_error4, confidence, trials, seed,
+  m.def("estimate_fundamental_matrix",
+        &EstimateFromPixelPairs<FundamentalMatrixSevenPointEstimator,
+                                FundamentalMatrixEightPointEstimator>,
+        py::arg("points1"), py::arg("points2"), py::kw_only(), max_error4, confidence, trials, seed,
         "Fundamental matrix F (x2^T F x1 = 0) from N x 2 pixel correspondences: 7-point "
         "samples, normalised 8-point refits (LO-RANSAC); max_error is the Sampson distance in "
         "pixels. result.model is F (3 x 3).");
-  m.def("estimate_homography", &EstimateHomography, py::arg("points1"), py::arg("points2"),
-        py::kw_only(), max_error4, confidence, trials, seed,
+  m.def("estimate_homography",
+        &EstimateFromPixelPairs<HomographyMatrixEstimator, HomographyMatrixEstimator>,
+        py::arg("points1"), py::arg("points2"), py::kw_only(), max_error4, confidence, trials, seed,
         "Homography H (x2 ~ H x1) from N x 2 pixel correspondences (4-point DLT, LO-RANSAC); "
         "max_error in pixels. result.model is H (3 x 3).");
   m.def("estimate_essential_matrix", &EstimateEssential, py::arg("points1"), py::arg("points2"),
