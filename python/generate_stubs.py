@@ -226,7 +226,8 @@ PIPELINE = [
      "list[Reconstruction]"),
     ("reconstruct",
      "image_dir: PathLike, output_dir: PathLike, *, database: Optional[PathLike] = ..., "
-     "ground_truth: Optional[PathLike] = ..., report: bool = ..., threads: int = ..., "
+     "ground_truth: Optional[PathLike] = ..., report: bool = ..., remap: bool = ..., "
+     "threads: int = ..., "
      "seed: int = ...", "ReconstructionResult"),
 ]
 

@@ -114,8 +114,8 @@ std::vector<Reconstruction> Map(const fs::path& database, const fs::path& image_
 ReconstructionRunResult Reconstruct(const fs::path& image_dir, const fs::path& output_dir,
                                     const std::optional<fs::path>& database,
                                     const std::optional<fs::path>& ground_truth, bool report,
-                                    int threads, uint64_t seed, const py::object& progress,
-                                    const py::kwargs& kwargs) {
+                                    bool remap, int threads, uint64_t seed,
+                                    const py::object& progress, const py::kwargs& kwargs) {
   ReconstructionPipelineOptions options;
   CLI::App app;
   cli::AddExtractionOptions(app, &options.extraction);
@@ -126,6 +126,7 @@ ReconstructionRunResult Reconstruct(const fs::path& image_dir, const fs::path& o
   options.database_path = database.value_or(fs::path());
   options.ground_truth_path = ground_truth.value_or(fs::path());
   options.write_report = report;
+  options.extend_model_with_new_photos = !remap;
   ReconstructionPipelineResult result;
   RunReleasingGil([&] { result = RunReconstructionPipeline(options, image_dir, output_dir); },
                   progress);
@@ -225,13 +226,14 @@ void BindPipeline(py::module_& m) {
             .c_str());
   m.def("reconstruct", &Reconstruct, py::arg("image_dir"), py::arg("output_dir"), py::kw_only(),
         py::arg("database") = py::none(), py::arg("ground_truth") = py::none(),
-        py::arg("report") = false, py::arg("threads") = -1, py::arg("seed") = 0,
-        py::arg("progress") = py::none(),
+        py::arg("report") = false, py::arg("remap") = false, py::arg("threads") = -1,
+        py::arg("seed") = 0, py::arg("progress") = py::none(),
         Doc("reconstruct",
             "The whole pipeline, as `parallax reconstruct`: features, matching, mapping, "
             "outputs in output_dir (database OUT/database.db unless database is given), the "
             "evaluation against ground_truth (*_par.txt, a gt/ folder of *.camera files or a "
-            "COLMAP model) and OUT/report.html when report=True. Reruns resume. Returns a "
+            "COLMAP model) and OUT/report.html when report=True. Reruns resume; photos added "
+            "since an earlier run are registered into its model unless remap=True. Returns a "
             "ReconstructionResult.")
             .c_str());
   m.def(

@@ -235,6 +235,7 @@ def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: 
         ) -> MatchResult: ...
 
 def map(database: PathLike, image_dir: PathLike, output_dir: PathLike, *, seed: int = ..., progress: Progress = ...,
+        input_model: Union[str, os.PathLike] = ...,
         init_min_inliers: int = ...,
         init_min_tri_angle: float = ...,
         abs_pose_min_inliers: int = ...,
@@ -259,7 +260,7 @@ def map(database: PathLike, image_dir: PathLike, output_dir: PathLike, *, seed: 
         no_binary: bool = ...,
         ) -> list[Reconstruction]: ...
 
-def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional[PathLike] = ..., ground_truth: Optional[PathLike] = ..., report: bool = ..., threads: int = ..., seed: int = ..., progress: Progress = ...,
+def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional[PathLike] = ..., ground_truth: Optional[PathLike] = ..., report: bool = ..., remap: bool = ..., threads: int = ..., seed: int = ..., progress: Progress = ...,
         camera_model: Union[str, os.PathLike] = ...,
         camera_params: Union[str, Sequence[float]] = ...,
         intrinsics: Union[str, os.PathLike] = ...,
@@ -294,6 +295,7 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         ratio: float = ...,
         no_cross_check: bool = ...,
         max_error: float = ...,
+        input_model: Union[str, os.PathLike] = ...,
         init_min_inliers: int = ...,
         init_min_tri_angle: float = ...,
         abs_pose_min_inliers: int = ...,

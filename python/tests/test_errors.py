@@ -11,13 +11,16 @@ import pytest
 import parallax
 
 
-def test_missing_files_raise_file_not_found(tmp_path):
+def test_missing_files_raise_file_not_found(tmp_path, reconstruction_dir):
     with pytest.raises(FileNotFoundError, match=f"{tmp_path / 'none'}: image folder does not exist"):
         parallax.reconstruct(tmp_path / "none", tmp_path / "out")
     with pytest.raises(FileNotFoundError, match="database does not exist"):
         parallax.match(tmp_path / "missing.db")
     with pytest.raises(FileNotFoundError, match="model folder does not exist"):
         parallax.read_model(tmp_path / "no-model")
+    with pytest.raises(FileNotFoundError, match="no-model: model folder does not exist"):
+        parallax.map(reconstruction_dir[0] / "database.db", tmp_path, tmp_path / "out",
+                     input_model=tmp_path / "no-model")
     with pytest.raises(FileNotFoundError, match="no such file or folder"):
         parallax.evaluate(parallax.Reconstruction(), tmp_path / "gt.txt")
 

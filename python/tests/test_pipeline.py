@@ -42,6 +42,13 @@ def test_steps_one_by_one_reconstruct_the_scene(scene_dir, tmp_path):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["images_registered"] == SCENE_VIEWS
 
+    # The model extended (as COLMAP's mapper --input_path): every image keeps its pose.
+    extended = parallax.map(database, scene_dir, tmp_path / "out2", seed=5,
+                            input_model=tmp_path / "out" / "sparse" / "0")
+    assert extended[0].num_reg_images() == SCENE_VIEWS
+    kept = json.loads((tmp_path / "out2" / "summary.json").read_text())["mapper"]["input_model"]
+    assert kept == {"images_kept": SCENE_VIEWS, "images_missing": []}
+
     metrics = parallax.evaluate(model, scene_dir / "synth_par.txt")
     assert metrics["images_registered_in_gt"] == SCENE_VIEWS
     assert metrics["rotation_error_deg"]["median"] < 0.2

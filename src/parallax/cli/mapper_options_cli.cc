@@ -9,6 +9,10 @@ namespace parallax::cli {
 
 void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   IncrementalMapperOptions& mapper = options->mapper;
+  app.add_option("--input-model", options->input_model,
+                 "Extend this model (COLMAP format, e.g. OUT/sparse/0): its images keep their "
+                 "poses and the database's other images are registered into it (COLMAP's "
+                 "mapper --input_path)");
   app.add_option("--init-min-inliers", mapper.init_min_num_inliers,
                  "Points the initial pair must triangulate")
       ->capture_default_str();
@@ -115,6 +119,15 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
 void PrintMappingResult(const MappingStageResult& result, const std::filesystem::path& output_dir) {
   for (const std::string& line : UnregisteredImageLines(result)) std::cout << line << "\n";
   if (result.models.empty()) return;
+  if (result.num_input_model_images > 0) {
+    std::cout << "extended the input model: " << result.num_input_model_images
+              << " images kept their poses";
+    if (!result.input_model_images_missing.empty()) {
+      std::cout << ", " << result.input_model_images_missing.size()
+                << " of its images are gone and were left out";
+    }
+    std::cout << "\n";
+  }
   for (size_t index = 0; index < result.models.size(); ++index) {
     const Reconstruction& model = result.models[index];
     Reconstruction copy = model;

@@ -28,6 +28,9 @@ int RunReconstruct(int argc, char** argv) {
                  "--ba-threads 1)")
       ->capture_default_str();
   app.add_flag("--report", options.write_report, "Also write OUT/report.html");
+  app.add_flag("!--remap", options.extend_model_with_new_photos,
+               "Map all photos from scratch even when OUT holds the model of an earlier run and "
+               "only photos were added (default: the new photos are registered into it)");
   AddExtractionOptions(app, &options.extraction);
   AddMatchingOptions(app, &options.matching);
   AddMapperOptions(app, &options.mapping);

@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <optional>
+
 #include "parallax/image/image_reader.h"
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
@@ -18,6 +20,8 @@ void MappingStageOptions::Check() const {
   PARALLAX_CHECK_MSG(cluster_file.empty() || mapper_type == MapperType::kIncremental,
                      "a cluster file is mapped by the incremental mapper");
   PARALLAX_CHECK_MSG(write_text || write_binary, "at least one model format must be written");
+  PARALLAX_CHECK_MSG(input_model.empty() || mapper_type == MapperType::kIncremental,
+                     "an input model is extended by the incremental mapper");
 }
 
 void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reconstruction) {
@@ -115,6 +119,9 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
   options.Check();
   MappingStageResult result;
   Timer timer;
+  // Read first: a missing or malformed model stops the stage before the database is loaded.
+  std::optional<Reconstruction> input_model;
+  if (!options.input_model.empty()) input_model = ReadReconstruction(options.input_model);
   MapperInput input = LoadMapperInput(database, options.input);
   if (!options.cluster_file.empty()) {
     const ImageCluster cluster = ReadImageCluster(options.cluster_file);
@@ -141,6 +148,21 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
     WriteClusterFiles(input, clusters, output_dir / "clusters");
     result.hierarchical.emplace();
     result.models = mapper.Reconstruct(clusters, &result.summary, &*result.hierarchical);
+  } else if (input_model) {
+    const Reconstruction seed =
+        ModelInInputIds(*input_model, input, &result.input_model_images_missing);
+    result.num_input_model_images = seed.NumRegImages();
+    PARALLAX_LOG(Info) << "mapper: extending " << options.input_model.string() << ": "
+                       << seed.NumRegImages() << " of its images keep their poses, "
+                       << input.images.size() - seed.NumRegImages() << " others to register";
+    if (!result.input_model_images_missing.empty()) {
+      PARALLAX_LOG(Warning) << "mapper: " << result.input_model_images_missing.size()
+                            << " images of " << options.input_model.string()
+                            << " are no longer in the database and are left out (first: "
+                            << result.input_model_images_missing.front() << ")";
+    }
+    IncrementalMapper mapper(options.mapper, input);
+    result.models = mapper.Extend(seed, &result.summary);
   } else {
     IncrementalMapper mapper(options.mapper, input);
     result.models = mapper.Reconstruct(&result.summary);

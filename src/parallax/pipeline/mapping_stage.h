@@ -25,6 +25,11 @@ struct MappingStageOptions {
   // When set, only the images and pairs of this cluster file are mapped (incrementally): the
   // unit of work of a partitioned run.
   std::filesystem::path cluster_file;
+  // A finished model (COLMAP format) to extend, as COLMAP's `mapper --input_path`: its images
+  // keep their poses (matched to the database by name) and the database's other images are
+  // registered into it; its points are triangulated anew from the database. Empty: map from
+  // scratch.
+  std::filesystem::path input_model;
   bool write_text = true;    // cameras.txt, images.txt, points3D.txt
   bool write_binary = true;  // the .bin twins
   void Check() const;
@@ -39,6 +44,10 @@ struct MappingStageResult {
   std::map<image_t, size_t> num_keypoints;
   double load_seconds = 0;
   double write_seconds = 0;
+  // With options.input_model: its registered images that seeded the mapper, and those of its
+  // images the database no longer holds (left out).
+  size_t num_input_model_images = 0;
+  std::vector<std::string> input_model_images_missing;
 };
 
 // Loads the database, runs the mapper, colours the points from the images in `image_dir`

@@ -30,6 +30,16 @@ void SetSeedAndThreads(uint64_t seed, int num_threads, bool keep_ba_threads,
   }
 }
 
+namespace {
+
+bool HasModelFiles(const std::filesystem::path& dir) {
+  std::error_code error;
+  return std::filesystem::exists(dir / "cameras.bin", error) ||
+         std::filesystem::exists(dir / "cameras.txt", error);
+}
+
+}  // namespace
+
 ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipelineOptions& options,
                                                        const std::filesystem::path& image_dir,
                                                        const std::filesystem::path& output_dir) {
@@ -81,7 +91,17 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
 
   // 4 + 5. Mapping and outputs.
   timer.Restart();
-  result.mapping = RunMappingStage(options.mapping, database, image_dir, output_dir);
+  MappingStageOptions mapping = options.mapping;
+  const std::filesystem::path earlier_model = output_dir / "sparse" / "0";
+  if (options.extend_model_with_new_photos && mapping.input_model.empty() &&
+      mapping.mapper_type == MapperType::kIncremental && mapping.cluster_file.empty() &&
+      result.extraction.num_extracted > 0 && HasModelFiles(earlier_model)) {
+    mapping.input_model = earlier_model;
+    PARALLAX_LOG(Info) << "mapping: " << result.extraction.num_extracted
+                       << " new photos are registered into the earlier run's model ("
+                       << earlier_model.string() << "); --remap maps all from scratch";
+  }
+  result.mapping = RunMappingStage(mapping, database, image_dir, output_dir);
   result.timings.emplace_back("mapping", timer.ElapsedSeconds());
   for (const std::string& line : UnregisteredImageLines(result.mapping)) {
     PARALLAX_LOG(Warning) << line;

@@ -21,6 +21,10 @@ struct ReconstructionPipelineOptions {
   // Ground truth (Middlebury *_par.txt or Strecha gt/) to evaluate the first model against;
   // empty: none.
   std::filesystem::path ground_truth_path;
+  // When a rerun finds photos that the earlier run's model (OUT/sparse/0) has not seen, they
+  // are registered into that model (mapping.input_model) instead of mapping everything from
+  // scratch. Off (--remap): from scratch.
+  bool extend_model_with_new_photos = true;
   // OUT/report.html, with the evaluation when there is one.
   bool write_report = false;
   std::string report_title = "Parallax reconstruction report";

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -52,6 +53,69 @@ TEST(ReconstructionPipeline, SyntheticTempleThirtyViews) {
   EXPECT_EQ(num_points, model.NumPoints3D());
   EXPECT_EQ(num_observations, model.NumObservations());
   std::filesystem::remove_all(dir);
+}
+
+// A folder that gains photos after a run: the rerun registers the new ones into the earlier
+// model (whose images keep their poses), leaves out the photos that are gone, and says so in
+// summary.json; the result is as accurate as a run on all photos.
+TEST(ReconstructionPipeline, PhotosAddedLaterAreRegisteredIntoTheEarlierModel) {
+  namespace fs = std::filesystem;
+  const fs::path dir = TempDir("pipeline_added_photos");
+  SyntheticSceneOptions scene;
+  scene.num_views = 20;
+  GenerateSyntheticScene(scene, dir / "scene");
+  const auto view = [](int index) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "view_%04d.png", index);
+    return std::string(name);
+  };
+  // First run: the 14 views 1-14; the second adds 15-20 and loses 1 and 2.
+  fs::create_directories(dir / "photos");
+  for (int index = 1; index <= 14; ++index) {
+    fs::copy_file(dir / "scene" / view(index), dir / "photos" / view(index));
+  }
+  ReconstructionPipelineOptions options;
+  options.extraction.camera.intrinsics_path = dir / "scene" / "K.txt";
+  options.ground_truth_path = dir / "scene" / (scene.name + "_par.txt");
+  const ReconstructionPipelineResult first =
+      RunReconstructionPipeline(options, dir / "photos", dir / "out");
+  ASSERT_TRUE(first.Success());
+  ASSERT_EQ(first.mapping.models.front().NumRegImages(), 14u);
+  EXPECT_EQ(first.mapping.num_input_model_images, 0u);
+
+  for (int index = 15; index <= 20; ++index) {
+    fs::copy_file(dir / "scene" / view(index), dir / "photos" / view(index));
+  }
+  fs::remove(dir / "photos" / view(1));
+  fs::remove(dir / "photos" / view(2));
+  const ReconstructionPipelineResult second =
+      RunReconstructionPipeline(options, dir / "photos", dir / "out");
+  ASSERT_TRUE(second.Success());
+  EXPECT_EQ(second.extraction.num_extracted, 6u);
+  EXPECT_EQ(second.mapping.num_input_model_images, 12u);
+  EXPECT_EQ(second.mapping.input_model_images_missing,
+            (std::vector<std::string>{view(1), view(2)}));
+  const Reconstruction& model = second.mapping.models.front();
+  EXPECT_EQ(model.NumRegImages(), 18u);
+  for (const image_t image_id : model.RegImageIds()) {
+    EXPECT_NE(model.GetImage(image_id).name, view(1));
+    EXPECT_NE(model.GetImage(image_id).name, view(2));
+  }
+  ASSERT_TRUE(second.evaluation.has_value());
+  EXPECT_LT(second.evaluation->rotation_error_deg.median, 0.1);
+  EXPECT_LT(second.evaluation->center_error_ratio.median, 0.002);
+  EXPECT_EQ(second.summary["mapper"]["input_model"]["images_kept"], 12);
+  EXPECT_EQ(second.summary["mapper"]["input_model"]["images_missing"].size(), 2u);
+
+  // --remap: from scratch, the same photos.
+  fs::copy_file(dir / "scene" / view(1), dir / "photos" / view(1));
+  options.extend_model_with_new_photos = false;
+  const ReconstructionPipelineResult remapped =
+      RunReconstructionPipeline(options, dir / "photos", dir / "out");
+  ASSERT_TRUE(remapped.Success());
+  EXPECT_EQ(remapped.mapping.num_input_model_images, 0u);
+  EXPECT_EQ(remapped.mapping.models.front().NumRegImages(), 19u);
+  fs::remove_all(dir);
 }
 
 // templeRing reconstructed end to end into a fresh folder, evaluated against its ground truth.

@@ -57,4 +57,38 @@ MapperInput LoadMapperInput(const Database& database, const MapperInputOptions& 
   return input;
 }
 
+Reconstruction ModelInInputIds(const Reconstruction& model, const MapperInput& input,
+                               std::vector<std::string>* missing) {
+  std::map<std::string, image_t> input_ids;
+  for (const auto& [image_id, image] : input.images) input_ids[image.name] = image_id;
+  Reconstruction seed;
+  for (const image_t model_id : model.RegImageIds()) {
+    const Image& model_image = model.GetImage(model_id);
+    const auto found = input_ids.find(model_image.name);
+    if (found == input_ids.end()) {
+      if (missing != nullptr) missing->push_back(model_image.name);
+      continue;
+    }
+    const Image& input_image = input.images.at(found->second);
+    if (!seed.ExistsCamera(input_image.camera_id)) {
+      Camera camera = input.cameras.at(input_image.camera_id);
+      const Camera& model_camera = model.GetCamera(model_image.camera_id);
+      // The model's intrinsics, when its camera is of the same kind (they were refined).
+      if (model_camera.model_id == camera.model_id && model_camera.width == camera.width &&
+          model_camera.height == camera.height) {
+        camera.params = model_camera.params;
+      }
+      seed.AddCamera(camera);
+    }
+    Image image;
+    image.image_id = input_image.image_id;
+    image.camera_id = input_image.camera_id;
+    image.name = input_image.name;
+    image.cam_from_world = model_image.cam_from_world;
+    seed.AddImage(image);
+    seed.RegisterImage(image.image_id);
+  }
+  return seed;
+}
+
 }  // namespace parallax

@@ -1,11 +1,14 @@
 #pragma once
 
 #include <map>
+#include <string>
+#include <vector>
 
 #include "parallax/scene/camera.h"
 #include "parallax/scene/correspondence_graph.h"
 #include "parallax/scene/database.h"
 #include "parallax/scene/image.h"
+#include "parallax/scene/reconstruction.h"
 #include "parallax/scene/two_view_geometry.h"
 
 namespace parallax {
@@ -30,5 +33,12 @@ MapperInput LoadMapperInput(const Database& database, const MapperInputOptions& 
 
 // Builds a MapperInput from parts already in memory (synthetic scenes, tests).
 void FinalizeMapperInput(const MapperInputOptions& options, MapperInput* input);
+
+// A finished model restated in the ids of `input`, as IncrementalMapper::Extend takes it: the
+// registered images of `model` that `input` holds (matched by name; ids of the two need not
+// agree), with their poses, and the intrinsics of their cameras in the model. The names of
+// the model's registered images that `input` lacks (photos removed since) go to `missing`.
+Reconstruction ModelInInputIds(const Reconstruction& model, const MapperInput& input,
+                               std::vector<std::string>* missing);
 
 }  // namespace parallax
