@@ -61,6 +61,7 @@ trap 'rm -rf "$scratch"' EXIT
 "$build/parallax" reconstruct --images "$scratch/scene" --output "$scratch/out" --seed 1 -q
 "$build/parallax" evaluate "$scratch/out/sparse/0" --gt "$scratch/scene/synth_par.txt"
 "$build/parallax" report "$scratch/out" --images "$scratch/scene" --gt "$scratch/scene/synth_par.txt" -q
+"$build/parallax" undistort --model "$scratch/out/sparse/0" --images "$scratch/scene" --output "$scratch/dense" -q
 
 step "fuzzers, ${fuzz_seconds} s each"
 for fuzzer in "$build"/fuzz/*_fuzz; do

@@ -7,6 +7,7 @@
 #include "bindings.h"
 #include "parallax/calibration/camera_json.h"
 #include "parallax/calibration/checkerboard_calibration.h"
+#include "parallax/export/image_undistortion.h"
 #include "parallax/render/synthetic_scene.h"
 #include "parallax/report/evaluation.h"
 #include "parallax/report/ground_truth.h"
@@ -82,6 +83,23 @@ Reconstruction Synthesize(const fs::path& output_dir, int views, const std::stri
   return scene;
 }
 
+int Undistort(const py::object& model, const fs::path& image_dir, const fs::path& output_dir,
+              int max_size, double blank_pixels, int jpeg_quality, int threads,
+              const py::object& progress) {
+  const Reconstruction reconstruction = ModelOf(model);
+  UndistortionOptions options;
+  options.max_image_size = max_size;
+  options.blank_pixels = blank_pixels;
+  options.jpeg_quality = jpeg_quality;
+  options.num_threads = threads;
+  options.Check();
+  UndistortionResult result;
+  RunReleasingGil(
+      [&] { result = WriteUndistortedWorkspace(reconstruction, image_dir, output_dir, options); },
+      progress);
+  return static_cast<int>(result.num_images);
+}
+
 // The calibration as a dict: the camera.json fields and the per-image outcome.
 py::dict Calibrate(const fs::path& image_dir, const std::pair<int, int>& pattern, double square,
                    const std::optional<fs::path>& output,
@@ -145,6 +163,16 @@ void BindTools(py::module_& m) {
         "Writes OUT/report.html for a finished run, as `parallax report`: model default "
         "OUT/sparse/0, database default OUT/database.db, images from summary.json. Returns the "
         "report's path.");
+  const UndistortionOptions undistortion;
+  m.def("undistort", &Undistort, py::arg("model"), py::arg("image_dir"), py::arg("output_dir"),
+        py::kw_only(), py::arg("max_size") = undistortion.max_image_size,
+        py::arg("blank_pixels") = undistortion.blank_pixels,
+        py::arg("jpeg_quality") = undistortion.jpeg_quality,
+        py::arg("threads") = undistortion.num_threads, py::arg("progress") = py::none(),
+        "COLMAP's dense workspace from a model (Reconstruction or model folder) and its photos, "
+        "as `parallax undistort`: output_dir/images (PINHOLE, same names), output_dir/sparse, "
+        "output_dir/stereo. blank_pixels 0 crops to valid pixels, 1 keeps all of the photo. "
+        "Returns the number of images written.");
   const SyntheticSceneOptions defaults;
   m.def("synthesize", &Synthesize, py::arg("output_dir"), py::kw_only(),
         py::arg("views") = defaults.num_views, py::arg("layout") = "ring",

@@ -49,6 +49,7 @@ from ._parallax import (  # noqa: F401
     set_log_level,
     synthesize,
     triangulate_points,
+    undistort,
     write_report,
 )
 

@@ -189,6 +189,9 @@ def synthesize(output_dir: PathLike, *, views: int = ..., layout: str = ...,
                lighting: float = ..., antialiasing: str = ..., shadows: bool = ...,
                oblique: float = ..., gps_noise: float = ..., name: str = ..., threads: int = ...,
                progress: Progress = ...) -> Reconstruction: ...
+def undistort(model: Union[Reconstruction, PathLike], image_dir: PathLike, output_dir: PathLike, *,
+              max_size: int = ..., blank_pixels: float = ..., jpeg_quality: int = ...,
+              threads: int = ..., progress: Progress = ...) -> int: ...
 def calibrate(image_dir: PathLike, pattern: tuple[int, int], *, square: float = ...,
               output: Optional[PathLike] = ..., size: Optional[tuple[int, int]] = ...,
               k3: bool = ..., sector_based: bool = ..., threads: int = ...) -> dict[str, Any]: ...

@@ -105,3 +105,15 @@ def test_export_ply(model_dir, tmp_path):
     model.export_ply(tmp_path / "points.ply")
     header = (tmp_path / "points.ply").read_bytes().split(b"end_header\n")[0].decode()
     assert f"element vertex {model.num_points3D()}" in header
+
+
+def test_undistort_writes_colmaps_dense_workspace(model_dir, scene_dir, tmp_path):
+    count = parallax.undistort(model_dir, scene_dir, tmp_path / "dense", max_size=320)
+    assert count == SCENE_VIEWS
+    sparse = parallax.read_model(tmp_path / "dense" / "sparse")
+    camera = next(iter(sparse.cameras.values()))
+    assert camera.model == "PINHOLE" and max(camera.width, camera.height) == 320
+    image = sparse.images[sparse.reg_image_ids()[0]]
+    pixels = parallax.read_image(tmp_path / "dense" / "images" / image.name)
+    assert pixels.shape == (camera.height, camera.width, 3)
+    assert (tmp_path / "dense" / "stereo" / "patch-match.cfg").exists()

@@ -14,5 +14,6 @@ int RunReconstruct(int argc, char** argv);
 int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);
 int RunReport(int argc, char** argv);
+int RunUndistort(int argc, char** argv);
 
 }  // namespace parallax::cli

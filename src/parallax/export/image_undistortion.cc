@@ -1,0 +1,228 @@
+#include "parallax/export/image_undistortion.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "parallax/image/image_codecs.h"
+#include "parallax/image/image_reader.h"
+#include "parallax/scene/colmap_io.h"
+#include "parallax/util/check.h"
+#include "parallax/util/file.h"
+#include "parallax/util/progress.h"
+#include "parallax/util/threading.h"
+#include "parallax/util/timer.h"
+
+namespace parallax {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Where each pixel of `undistorted` reads from in a photo of `camera` (cv::remap's maps).
+struct UndistortionMaps {
+  cv::Mat map_x;
+  cv::Mat map_y;
+};
+
+UndistortionMaps MakeUndistortionMaps(const Camera& camera, const Camera& undistorted) {
+  UndistortionMaps maps;
+  const int width = static_cast<int>(undistorted.width);
+  const int height = static_cast<int>(undistorted.height);
+  maps.map_x.create(height, width, CV_32FC1);
+  maps.map_y.create(height, width, CV_32FC1);
+  for (int row = 0; row < height; ++row) {
+    float* map_x = maps.map_x.ptr<float>(row);
+    float* map_y = maps.map_y.ptr<float>(row);
+    for (int col = 0; col < width; ++col) {
+      // Pixel centres are at +0.5 (COLMAP's convention), array indices at +0.
+      const Eigen::Vector2d ray = undistorted.CamFromImg(Eigen::Vector2d(col + 0.5, row + 0.5));
+      const Eigen::Vector2d source = camera.ImgFromCam(ray.homogeneous());
+      map_x[col] = static_cast<float>(source.x() - 0.5);
+      map_y[col] = static_cast<float>(source.y() - 0.5);
+    }
+  }
+  return maps;
+}
+
+cv::Mat Remap(const cv::Mat& image, const UndistortionMaps& maps) {
+  cv::Mat undistorted;
+  cv::remap(image, undistorted, maps.map_x, maps.map_y, cv::INTER_CUBIC, cv::BORDER_CONSTANT,
+            cv::Scalar::all(0));
+  return undistorted;
+}
+
+std::string LowerExtension(const std::string& name) {
+  std::string extension = fs::path(name).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return extension;
+}
+
+bool IsJpegName(const std::string& name) {
+  const std::string extension = LowerExtension(name);
+  return extension == ".jpg" || extension == ".jpeg";
+}
+
+// The name of the undistorted image: the photo's, unless it cannot hold PNG or JPEG bytes.
+std::string UndistortedImageName(const std::string& name) {
+  return IsJpegName(name) || LowerExtension(name) == ".png" ? name : name + ".png";
+}
+
+void WriteStereoConfig(const Reconstruction& model, const fs::path& stereo_dir) {
+  std::string patch_match, fusion;
+  for (const image_t image_id : model.RegImageIds()) {
+    const std::string& name = model.GetImage(image_id).name;
+    // COLMAP picks each image's source images itself (__auto__) among 20 candidates.
+    patch_match += name + "\n__auto__, 20\n";
+    fusion += name + "\n";
+  }
+  for (const char* folder : {"depth_maps", "normal_maps", "consistency_graphs"}) {
+    CreateDirectoryOrThrow(stereo_dir / folder);
+  }
+  WriteTextFileAtomically(stereo_dir / "patch-match.cfg", patch_match);
+  WriteTextFileAtomically(stereo_dir / "fusion.cfg", fusion);
+}
+
+}  // namespace
+
+void UndistortionOptions::Check() const {
+  PARALLAX_CHECK(blank_pixels >= 0.0 && blank_pixels <= 1.0);
+  PARALLAX_CHECK(jpeg_quality >= 1 && jpeg_quality <= 100);
+}
+
+Camera UndistortedCamera(const Camera& camera, const UndistortionOptions& options) {
+  options.Check();
+  const double fx = camera.FocalLengthX(), fy = camera.FocalLengthY();
+  const double cx = camera.PrincipalPointX(), cy = camera.PrincipalPointY();
+  const double width = static_cast<double>(camera.width);
+  const double height = static_cast<double>(camera.height);
+  // Where the photo's borders land in a PINHOLE view with its focal lengths and principal
+  // point: the outline of what the photo shows, undistorted.
+  const auto undistort = [&](double x, double y) {
+    const Eigen::Vector2d ray = camera.CamFromImg(Eigen::Vector2d(x, y));
+    return Eigen::Vector2d(fx * ray.x() + cx, fy * ray.y() + cy);
+  };
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  double left_min = kInfinity, left_max = -kInfinity, right_min = kInfinity,
+         right_max = -kInfinity, top_min = kInfinity, top_max = -kInfinity,
+         bottom_min = kInfinity, bottom_max = -kInfinity;
+  for (int y = 0; y <= static_cast<int>(height); ++y) {
+    const double left = undistort(0, y).x(), right = undistort(width, y).x();
+    left_min = std::min(left_min, left);
+    left_max = std::max(left_max, left);
+    right_min = std::min(right_min, right);
+    right_max = std::max(right_max, right);
+  }
+  for (int x = 0; x <= static_cast<int>(width); ++x) {
+    const double top = undistort(x, 0).y(), bottom = undistort(x, height).y();
+    top_min = std::min(top_min, top);
+    top_max = std::max(top_max, top);
+    bottom_min = std::min(bottom_min, bottom);
+    bottom_max = std::max(bottom_max, bottom);
+  }
+  // blank_pixels 0: the box inside the outline (every pixel from the photo); 1: the box
+  // around it (everything the photo shows).
+  const double blank = options.blank_pixels;
+  const double left = blank * left_min + (1 - blank) * left_max;
+  const double right = blank * right_max + (1 - blank) * right_min;
+  const double top = blank * top_min + (1 - blank) * top_max;
+  const double bottom = blank * bottom_max + (1 - blank) * bottom_min;
+  PARALLAX_CHECK_MSG(right > left && bottom > top,
+                     "camera " << camera.camera_id << ": the distortion leaves no valid pixels");
+
+  double scale = 1.0;
+  const double longest = std::max(right - left, bottom - top);
+  if (options.max_image_size > 0 && longest > options.max_image_size) {
+    scale = options.max_image_size / longest;
+  }
+  Camera pinhole;
+  pinhole.camera_id = camera.camera_id;
+  pinhole.model_id = CameraModelId::kPinhole;
+  pinhole.width = static_cast<size_t>(std::max(1.0, std::floor(scale * (right - left))));
+  pinhole.height = static_cast<size_t>(std::max(1.0, std::floor(scale * (bottom - top))));
+  pinhole.params = {scale * fx, scale * fy, scale * (cx - left), scale * (cy - top)};
+  pinhole.has_prior_focal_length = true;
+  return pinhole;
+}
+
+cv::Mat UndistortImage(const cv::Mat& image, const Camera& camera, const Camera& undistorted) {
+  return Remap(image, MakeUndistortionMaps(camera, undistorted));
+}
+
+Reconstruction UndistortReconstruction(const Reconstruction& model,
+                                       const std::map<camera_t, Camera>& undistorted_cameras) {
+  Reconstruction undistorted = model;
+  for (const auto& [camera_id, camera] : undistorted_cameras) {
+    undistorted.GetCamera(camera_id) = camera;
+  }
+  for (const auto& [image_id, image] : model.Images()) {
+    const Camera& camera = model.GetCamera(image.camera_id);
+    const Camera& pinhole = undistorted.GetCamera(image.camera_id);
+    Image& moved = undistorted.GetImage(image_id);
+    for (Point2D& point : moved.points2D) {
+      point.xy = pinhole.ImgFromCam(camera.CamFromImg(point.xy).homogeneous());
+    }
+    moved.name = UndistortedImageName(image.name);
+  }
+  return undistorted;
+}
+
+UndistortionResult WriteUndistortedWorkspace(const Reconstruction& model, const fs::path& image_dir,
+                                             const fs::path& output_dir,
+                                             const UndistortionOptions& options) {
+  options.Check();
+  const Timer timer;
+  const std::vector<image_t> image_ids = model.RegImageIds();
+  for (const image_t image_id : image_ids) {
+    const fs::path path = image_dir / model.GetImage(image_id).name;
+    std::error_code error;
+    if (!fs::is_regular_file(path, error)) {
+      throw MissingFileError(path.string() + ": photo of the model not found");
+    }
+  }
+  std::map<camera_t, Camera> cameras;
+  std::map<camera_t, UndistortionMaps> maps;
+  for (const image_t image_id : image_ids) {
+    const camera_t camera_id = model.GetImage(image_id).camera_id;
+    if (cameras.count(camera_id)) continue;
+    cameras[camera_id] = UndistortedCamera(model.GetCamera(camera_id), options);
+    maps[camera_id] = MakeUndistortionMaps(model.GetCamera(camera_id), cameras[camera_id]);
+  }
+  const Reconstruction undistorted = UndistortReconstruction(model, cameras);
+
+  CreateDirectoryOrThrow(output_dir / "images");
+  ProgressReporter progress("undistort", image_ids.size());
+  ParallelFor(0, image_ids.size(), options.num_threads, [&](size_t index) {
+    const Image& image = model.GetImage(image_ids[index]);
+    const Camera& camera = model.GetCamera(image.camera_id);
+    const fs::path source = image_dir / image.name;
+    const Bitmap bitmap = ReadBitmap(source);
+    if (bitmap.Width() != static_cast<int>(camera.width) ||
+        bitmap.Height() != static_cast<int>(camera.height)) {
+      throw InputError(source.string() + ": image is " + std::to_string(bitmap.Width()) + "x" +
+                       std::to_string(bitmap.Height()) + " but its camera " +
+                       std::to_string(camera.camera_id) + " is " + std::to_string(camera.width) +
+                       "x" + std::to_string(camera.height));
+    }
+    const cv::Mat pixels = Remap(bitmap.color, maps.at(image.camera_id));
+    const std::string name = UndistortedImageName(image.name);
+    const std::string bytes =
+        IsJpegName(name) ? EncodeJpeg(pixels, options.jpeg_quality) : EncodePng(pixels);
+    const fs::path target = output_dir / "images" / name;
+    CreateDirectoryOrThrow(target.parent_path());
+    WriteFileAtomically(target, [&](std::ostream& stream) { stream << bytes; }, true);
+    progress.Increment();
+  });
+  progress.Finish();
+  WriteStereoConfig(undistorted, output_dir / "stereo");
+  WriteReconstructionBinary(undistorted, output_dir / "sparse");
+  UndistortionResult result;
+  result.num_images = image_ids.size();
+  result.seconds = timer.ElapsedSeconds();
+  return result;
+}
+
+}  // namespace parallax
