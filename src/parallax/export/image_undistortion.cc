@@ -106,9 +106,8 @@ Camera UndistortedCamera(const Camera& camera, const UndistortionOptions& option
     return Eigen::Vector2d(fx * ray.x() + cx, fy * ray.y() + cy);
   };
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
-  double left_min = kInfinity, left_max = -kInfinity, right_min = kInfinity,
-         right_max = -kInfinity, top_min = kInfinity, top_max = -kInfinity,
-         bottom_min = kInfinity, bottom_max = -kInfinity;
+  double left_min = kInfinity, left_max = -kInfinity, right_min = kInfinity, right_max = -kInfinity,
+         top_min = kInfinity, top_max = -kInfinity, bottom_min = kInfinity, bottom_max = -kInfinity;
   for (int y = 0; y <= static_cast<int>(height); ++y) {
     const double left = undistort(0, y).x(), right = undistort(width, y).x();
     left_min = std::min(left_min, left);
@@ -213,7 +212,8 @@ UndistortionResult WriteUndistortedWorkspace(const Reconstruction& model, const 
         IsJpegName(name) ? EncodeJpeg(pixels, options.jpeg_quality) : EncodePng(pixels);
     const fs::path target = output_dir / "images" / name;
     CreateDirectoryOrThrow(target.parent_path());
-    WriteFileAtomically(target, [&](std::ostream& stream) { stream << bytes; }, true);
+    WriteFileAtomically(
+        target, [&](std::ostream& stream) { stream << bytes; }, true);
     progress.Increment();
   });
   progress.Finish();

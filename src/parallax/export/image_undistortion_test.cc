@@ -59,9 +59,8 @@ TEST(UndistortedCamera, CropsToValidPixelsOrKeepsAllOfThePhoto) {
   // blank_pixels 0: every pixel of the undistorted image comes from inside the photo.
   const double w = cropped.width, h = cropped.height;
   for (double t = 0; t <= 1.0; t += 0.01) {
-    for (const Eigen::Vector2d& pixel :
-         {Eigen::Vector2d(t * w, 0), Eigen::Vector2d(t * w, h), Eigen::Vector2d(0, t * h),
-          Eigen::Vector2d(w, t * h)}) {
+    for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(t * w, 0), Eigen::Vector2d(t * w, h),
+                                         Eigen::Vector2d(0, t * h), Eigen::Vector2d(w, t * h)}) {
       const Eigen::Vector2d source = SourcePixel(camera, cropped, pixel.x(), pixel.y());
       EXPECT_GE(source.x(), -1e-6);
       EXPECT_LE(source.x(), 640 + 1e-6);
@@ -123,7 +122,8 @@ Reconstruction DistortedModel() {
   std::mt19937 random(3);
   std::uniform_real_distribution<double> uniform(-4, 4);
   std::vector<Eigen::Vector3d> points;
-  for (int i = 0; i < 40; ++i) points.emplace_back(uniform(random), uniform(random), 3 + uniform(random) / 4);
+  for (int i = 0; i < 40; ++i)
+    points.emplace_back(uniform(random), uniform(random), 3 + uniform(random) / 4);
   for (image_t image_id = 1; image_id <= 3; ++image_id) {
     Image image;
     image.image_id = image_id;
@@ -175,8 +175,9 @@ class WorkspaceTest : public ::testing::Test {
     fs::create_directories(dir_.path() / "photos");
     for (const auto& [image_id, image] : model_.Images()) {
       const cv::Mat pixels = RenderView(scene, model_.GetCamera(1), image.cam_from_world, {});
-      WriteFileAtomically(dir_.path() / "photos" / image.name,
-                          [&](std::ostream& stream) { stream << EncodePng(pixels); }, true);
+      WriteFileAtomically(
+          dir_.path() / "photos" / image.name,
+          [&](std::ostream& stream) { stream << EncodePng(pixels); }, true);
     }
   }
   test::ScopedTestDir dir_{"undistort"};
@@ -214,14 +215,16 @@ TEST_F(WorkspaceTest, BadPhotosAreOneLineErrorsAndLeaveNoModel) {
   EXPECT_FALSE(fs::exists(out));
   // A photo of another size than its camera's.
   const cv::Mat small(100, 120, CV_8UC3, cv::Scalar(50, 60, 70));
-  WriteFileAtomically(dir_.path() / "photos" / "view2.png",
-                      [&](std::ostream& stream) { stream << EncodePng(small); }, true);
+  WriteFileAtomically(
+      dir_.path() / "photos" / "view2.png",
+      [&](std::ostream& stream) { stream << EncodePng(small); }, true);
   try {
     WriteUndistortedWorkspace(model_, dir_.path() / "photos", out, {});
     FAIL() << "no error";
   } catch (const InputError& error) {
-    EXPECT_NE(std::string(error.what()).find("view2.png: image is 120x100 but its camera 1 is 640x480"),
-              std::string::npos);
+    EXPECT_NE(
+        std::string(error.what()).find("view2.png: image is 120x100 but its camera 1 is 640x480"),
+        std::string::npos);
   }
   EXPECT_FALSE(fs::exists(out / "sparse"));
 }

@@ -9,6 +9,7 @@
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
+#include "parallax/util/threading.h"
 #include "parallax/util/timer.h"
 
 namespace parallax {
@@ -25,16 +26,18 @@ void MappingStageOptions::Check() const {
 }
 
 void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reconstruction) {
-  std::map<point3D_t, Eigen::Vector3d> color_sums;
-  std::map<point3D_t, int> color_counts;
-  for (const image_t image_id : reconstruction->RegImageIds()) {
-    const Image& image = reconstruction->GetImage(image_id);
+  // Images are decoded in parallel (decoding is most of the time); their samples are summed in
+  // image order, so the colours do not depend on the threads.
+  const std::vector<image_t> image_ids = reconstruction->RegImageIds();
+  std::vector<std::vector<std::pair<point3D_t, Eigen::Vector3d>>> samples(image_ids.size());
+  ParallelFor(0, image_ids.size(), -1, [&](size_t index) {
+    const Image& image = reconstruction->GetImage(image_ids[index]);
     Bitmap bitmap;
     try {
       bitmap = ReadBitmap(image_dir / image.name);
     } catch (const std::exception& error) {
       PARALLAX_LOG(Warning) << "colours: " << error.what();
-      continue;
+      return;
     }
     for (const Point2D& point2D : image.points2D) {
       if (!point2D.HasPoint3D()) continue;
@@ -43,11 +46,17 @@ void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reco
       const int y = static_cast<int>(point2D.xy.y());
       if (x < 0 || y < 0 || x >= bitmap.color.cols || y >= bitmap.color.rows) continue;
       const cv::Vec3b bgr = bitmap.color.at<cv::Vec3b>(y, x);
+      samples[index].emplace_back(point2D.point3D_id, Eigen::Vector3d(bgr[2], bgr[1], bgr[0]));
+    }
+  });
+  std::map<point3D_t, Eigen::Vector3d> color_sums;
+  std::map<point3D_t, int> color_counts;
+  for (const auto& image_samples : samples) {
+    for (const auto& [point3D_id, rgb] : image_samples) {
       // try_emplace with Zero(): operator[] would start the sum from an uninitialised
       // Eigen vector (random colours, different in every run).
-      color_sums.try_emplace(point2D.point3D_id, Eigen::Vector3d::Zero()).first->second +=
-          Eigen::Vector3d(bgr[2], bgr[1], bgr[0]);
-      ++color_counts[point2D.point3D_id];
+      color_sums.try_emplace(point3D_id, Eigen::Vector3d::Zero()).first->second += rgb;
+      ++color_counts[point3D_id];
     }
   }
   for (const auto& [point3D_id, sum] : color_sums) {
