@@ -62,6 +62,9 @@ trap 'rm -rf "$scratch"' EXIT
 "$build/parallax" evaluate "$scratch/out/sparse/0" --gt "$scratch/scene/synth_par.txt"
 "$build/parallax" report "$scratch/out" --images "$scratch/scene" --gt "$scratch/scene/synth_par.txt" -q
 "$build/parallax" undistort --model "$scratch/out/sparse/0" --images "$scratch/scene" --output "$scratch/dense" -q
+for format in nerfstudio ply bundler nvm; do
+  "$build/parallax" export --model "$scratch/out/sparse/0" --format "$format" --output "$scratch/export-$format/model" -q
+done
 
 step "fuzzers, ${fuzz_seconds} s each"
 for fuzzer in "$build"/fuzz/*_fuzz; do

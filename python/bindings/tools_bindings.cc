@@ -8,6 +8,7 @@
 #include "parallax/calibration/camera_json.h"
 #include "parallax/calibration/checkerboard_calibration.h"
 #include "parallax/export/image_undistortion.h"
+#include "parallax/export/model_export_format.h"
 #include "parallax/render/synthetic_scene.h"
 #include "parallax/report/evaluation.h"
 #include "parallax/report/ground_truth.h"
@@ -173,6 +174,17 @@ void BindTools(py::module_& m) {
         "as `parallax undistort`: output_dir/images (PINHOLE, same names), output_dir/sparse, "
         "output_dir/stereo. blank_pixels 0 crops to valid pixels, 1 keeps all of the photo. "
         "Returns the number of images written.");
+  m.def(
+      "export_model",
+      [](const py::object& model, const fs::path& path, const std::string& format,
+         const std::string& image_prefix) {
+        ExportModel(ModelOf(model), format, path, {.image_prefix = image_prefix});
+      },
+      py::arg("model"), py::arg("path"), py::kw_only(), py::arg("format"),
+      py::arg("image_prefix") = NerfstudioExportOptions().image_prefix,
+      "Writes a model (Reconstruction or model folder) as `parallax export` does: format "
+      "'nerfstudio' (transforms.json, sparse_pc.ply beside it), 'ply' (points and camera "
+      "frustums), 'bundler' (bundle.out, list.txt beside it) or 'nvm'.");
   const SyntheticSceneOptions defaults;
   m.def("synthesize", &Synthesize, py::arg("output_dir"), py::kw_only(),
         py::arg("views") = defaults.num_views, py::arg("layout") = "ring",

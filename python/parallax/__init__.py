@@ -40,6 +40,7 @@ from ._parallax import (  # noqa: F401
     estimate_fundamental_matrix,
     estimate_homography,
     evaluate,
+    export_model,
     extract_features,
     extract_sift,
     read_image,

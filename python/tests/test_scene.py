@@ -117,3 +117,13 @@ def test_undistort_writes_colmaps_dense_workspace(model_dir, scene_dir, tmp_path
     pixels = parallax.read_image(tmp_path / "dense" / "images" / image.name)
     assert pixels.shape == (camera.height, camera.width, 3)
     assert (tmp_path / "dense" / "stereo" / "patch-match.cfg").exists()
+
+
+def test_export_model_for_nerfstudio(model_dir, tmp_path):
+    import json
+    parallax.export_model(model_dir, tmp_path / "transforms.json", format="nerfstudio")
+    transforms = json.loads((tmp_path / "transforms.json").read_text())
+    assert len(transforms["frames"]) == SCENE_VIEWS and transforms["camera_model"] == "OPENCV"
+    assert (tmp_path / "sparse_pc.ply").exists()
+    with pytest.raises(ValueError, match="unknown export format 'obj'"):
+        parallax.export_model(model_dir, tmp_path / "x.obj", format="obj")

@@ -15,5 +15,6 @@ int RunSynth(int argc, char** argv);
 int RunEvaluate(int argc, char** argv);
 int RunReport(int argc, char** argv);
 int RunUndistort(int argc, char** argv);
+int RunExport(int argc, char** argv);
 
 }  // namespace parallax::cli

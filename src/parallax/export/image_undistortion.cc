@@ -49,7 +49,7 @@ UndistortionMaps MakeUndistortionMaps(const Camera& camera, const Camera& undist
 
 cv::Mat Remap(const cv::Mat& image, const UndistortionMaps& maps) {
   cv::Mat undistorted;
-  cv::remap(image, undistorted, maps.map_x, maps.map_y, cv::INTER_CUBIC, cv::BORDER_CONSTANT,
+  cv::remap(image, undistorted, maps.map_x, maps.map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
             cv::Scalar::all(0));
   return undistorted;
 }
@@ -99,8 +99,8 @@ Camera UndistortedCamera(const Camera& camera, const UndistortionOptions& option
   const double cx = camera.PrincipalPointX(), cy = camera.PrincipalPointY();
   const double width = static_cast<double>(camera.width);
   const double height = static_cast<double>(camera.height);
-  // Where the photo's borders land in a PINHOLE view with its focal lengths and principal
-  // point: the outline of what the photo shows, undistorted.
+  // Where the centres of the photo's border pixels land in a PINHOLE view with its focal
+  // lengths and principal point: the outline of what the photo shows, undistorted.
   const auto undistort = [&](double x, double y) {
     const Eigen::Vector2d ray = camera.CamFromImg(Eigen::Vector2d(x, y));
     return Eigen::Vector2d(fx * ray.x() + cx, fy * ray.y() + cy);
@@ -108,41 +108,58 @@ Camera UndistortedCamera(const Camera& camera, const UndistortionOptions& option
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
   double left_min = kInfinity, left_max = -kInfinity, right_min = kInfinity, right_max = -kInfinity,
          top_min = kInfinity, top_max = -kInfinity, bottom_min = kInfinity, bottom_max = -kInfinity;
-  for (int y = 0; y <= static_cast<int>(height); ++y) {
-    const double left = undistort(0, y).x(), right = undistort(width, y).x();
+  for (size_t row = 0; row < camera.height; ++row) {
+    const double left = undistort(0.5, row + 0.5).x();
+    const double right = undistort(width - 0.5, row + 0.5).x();
     left_min = std::min(left_min, left);
     left_max = std::max(left_max, left);
     right_min = std::min(right_min, right);
     right_max = std::max(right_max, right);
   }
-  for (int x = 0; x <= static_cast<int>(width); ++x) {
-    const double top = undistort(x, 0).y(), bottom = undistort(x, height).y();
+  for (size_t col = 0; col < camera.width; ++col) {
+    const double top = undistort(col + 0.5, 0.5).y();
+    const double bottom = undistort(col + 0.5, height - 0.5).y();
     top_min = std::min(top_min, top);
     top_max = std::max(top_max, top);
     bottom_min = std::min(bottom_min, bottom);
     bottom_max = std::max(bottom_max, bottom);
   }
-  // blank_pixels 0: the box inside the outline (every pixel from the photo); 1: the box
-  // around it (everything the photo shows).
+  // The view keeps the principal point where it is relative to the image and scales the image
+  // about it, as COLMAP's image_undistorter does (so its workspaces and ours agree): the
+  // smallest scale on any side keeps all of the photo (blank_pixels 1), the largest keeps
+  // only pixels from it (blank_pixels 0).
+  const double min_scale_x = std::min(cx / (cx - left_min), (width - 0.5 - cx) / (right_max - cx));
+  const double max_scale_x = std::max(cx / (cx - left_max), (width - 0.5 - cx) / (right_min - cx));
+  const double min_scale_y = std::min(cy / (cy - top_min), (height - 0.5 - cy) / (bottom_max - cy));
+  const double max_scale_y = std::max(cy / (cy - top_max), (height - 0.5 - cy) / (bottom_min - cy));
   const double blank = options.blank_pixels;
-  const double left = blank * left_min + (1 - blank) * left_max;
-  const double right = blank * right_max + (1 - blank) * right_min;
-  const double top = blank * top_min + (1 - blank) * top_max;
-  const double bottom = blank * bottom_max + (1 - blank) * bottom_min;
-  PARALLAX_CHECK_MSG(right > left && bottom > top,
-                     "camera " << camera.camera_id << ": the distortion leaves no valid pixels");
+  // Never more than 5 times smaller or 2 times larger than the photo.
+  const double scale_x =
+      std::clamp(1.0 / (min_scale_x * blank + max_scale_x * (1.0 - blank)), 0.2, 2.0);
+  const double scale_y =
+      std::clamp(1.0 / (min_scale_y * blank + max_scale_y * (1.0 - blank)), 0.2, 2.0);
+  PARALLAX_CHECK_MSG(std::isfinite(scale_x) && std::isfinite(scale_y),
+                     "camera " << camera.camera_id << ": its principal point is outside the image");
 
-  double scale = 1.0;
-  const double longest = std::max(right - left, bottom - top);
-  if (options.max_image_size > 0 && longest > options.max_image_size) {
-    scale = options.max_image_size / longest;
-  }
   Camera pinhole;
   pinhole.camera_id = camera.camera_id;
   pinhole.model_id = CameraModelId::kPinhole;
-  pinhole.width = static_cast<size_t>(std::max(1.0, std::floor(scale * (right - left))));
-  pinhole.height = static_cast<size_t>(std::max(1.0, std::floor(scale * (bottom - top))));
-  pinhole.params = {scale * fx, scale * fy, scale * (cx - left), scale * (cy - top)};
+  pinhole.width = static_cast<size_t>(std::max(1.0, scale_x * width));
+  pinhole.height = static_cast<size_t>(std::max(1.0, scale_y * height));
+  pinhole.params = {fx, fy, cx * static_cast<double>(pinhole.width) / width,
+                    cy * static_cast<double>(pinhole.height) / height};
+  // Longer than max_image_size: everything scaled down together.
+  const size_t longest = std::max(pinhole.width, pinhole.height);
+  if (options.max_image_size > 0 && longest > static_cast<size_t>(options.max_image_size)) {
+    const double scale = static_cast<double>(options.max_image_size) / longest;
+    const size_t scaled_width = std::max<size_t>(1, std::lround(scale * pinhole.width));
+    const size_t scaled_height = std::max<size_t>(1, std::lround(scale * pinhole.height));
+    pinhole.params = {fx * scaled_width / pinhole.width, fy * scaled_height / pinhole.height,
+                      pinhole.params[2] * scaled_width / pinhole.width,
+                      pinhole.params[3] * scaled_height / pinhole.height};
+    pinhole.width = scaled_width;
+    pinhole.height = scaled_height;
+  }
   pinhole.has_prior_focal_length = true;
   return pinhole;
 }

@@ -24,12 +24,14 @@ struct UndistortionOptions {
   void Check() const;
 };
 
-// The PINHOLE camera of `camera`'s undistorted images: its focal lengths (scaled with
-// max_image_size), the size and principal point that blank_pixels selects.
+// The PINHOLE camera of `camera`'s undistorted images, as COLMAP's image_undistorter makes it:
+// the same focal lengths, the image scaled about the principal point (kept at the same
+// relative position) so that blank_pixels 0 shows only pixels from the photo and 1 all of it;
+// then everything scaled down to max_image_size.
 Camera UndistortedCamera(const Camera& camera, const UndistortionOptions& options);
 
 // `image` (taken by `camera`, of its size) resampled into `undistorted` by bilinear
-// interpolation; pixels that fall outside the photo are black.
+// interpolation, as COLMAP does; pixels that fall outside the photo are black.
 cv::Mat UndistortImage(const cv::Mat& image, const Camera& camera, const Camera& undistorted);
 
 // `model` in undistorted coordinates: `undistorted_cameras` (by camera id) replace its

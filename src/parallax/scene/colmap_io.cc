@@ -13,6 +13,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "parallax/util/byte_order.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 
@@ -192,15 +193,6 @@ class BinaryReader {
   bool size_known_ = false;
   uint64_t remaining_ = 0;
 };
-
-template <typename T>
-void WriteBinary(std::ostream& stream, T value) {
-  static_assert(std::is_arithmetic_v<T>);
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) std::reverse(bytes, bytes + sizeof(T));
-  stream.write(bytes, sizeof(T));
-}
 
 // Restores a stream's formatting when the writer returns.
 class PrecisionGuard {
