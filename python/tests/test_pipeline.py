@@ -120,3 +120,27 @@ def test_paper_figures_example_runs(scene_dir, tmp_path):
     assert f"registered {SCENE_VIEWS}/{SCENE_VIEWS} images" in run.stdout
     for name in ("reprojection_errors.png", "trajectory.png"):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_calibrate_on_the_chessboard_photos(tmp_path):
+    """The paper's checkerboard calibration from Python (the shared data set; skipped without)."""
+    import os
+    import pathlib
+    data = pathlib.Path(os.environ.get("PARALLAX_DATA", pathlib.Path(__file__).resolve().parents[3]
+                                       / "shared" / "data")) / "checkerboard" / "images"
+    if not data.is_dir():
+        pytest.skip(f"{data}: no checkerboard photos")
+    calibration = parallax.calibrate(data, (8, 6), output=tmp_path / "camera.json")
+    # 12 photos of the calibrated size 1280 x 960; the others are reported as another size.
+    assert calibration["num_used_images"] == 12
+    assert (calibration["width"], calibration["height"]) == (1280, 960)
+    assert calibration["rms_error_px"] < 0.6
+    statuses = {image["status"] for image in calibration["images"]}
+    assert "used" in statuses and len(calibration["images"]) == 28
+    assert calibration["camera"].model == "OPENCV"
+    K = calibration["K"]
+    assert K[0, 0] > 0 and abs(K[0, 0] - K[1, 1]) / K[0, 0] < 0.02
+    assert 0.3 < K[0, 2] / calibration["width"] < 0.7
+    assert json.loads((tmp_path / "camera.json").read_text())
+    with pytest.raises(FileNotFoundError, match="image folder does not exist"):
+        parallax.calibrate(tmp_path / "none", (8, 6))
