@@ -297,29 +297,6 @@ void BindPoint3D(py::module_& m) {
       });
 }
 
-// The numbers `summary.json` gives for the model (evaluation's GT-free statistics).
-py::dict ModelSummary(const Reconstruction& model) {
-  Reconstruction copy = model;
-  py::dict summary;
-  summary["cameras"] = model.NumCameras();
-  summary["images"] = model.NumImages();
-  summary["images_registered"] = model.NumRegImages();
-  summary["points3D"] = model.NumPoints3D();
-  summary["observations"] = model.NumObservations();
-  summary["mean_track_length"] = model.ComputeMeanTrackLength();
-  summary["mean_observations_per_image"] = model.ComputeMeanObservationsPerRegImage();
-  summary["mean_reprojection_error_px"] = copy.UpdatePointErrors();
-  py::list histogram;
-  for (const auto& [length, count] : model.ComputeTrackLengthHistogram()) {
-    py::dict entry;
-    entry["length"] = length;
-    entry["points"] = count;
-    histogram.append(entry);
-  }
-  summary["track_length_histogram"] = histogram;
-  return summary;
-}
-
 template <typename Column>
 py::array_t<Column> PointColumn(
     const Reconstruction& model, int width,
@@ -450,8 +427,10 @@ void BindReconstruction(py::module_& m) {
           "Images that see each point.")
       .def("update_point_errors", &Reconstruction::UpdatePointErrors,
            "Recomputes every point's error; returns the mean over observations, pixels.")
-      .def("summary", &ModelSummary,
-           "Counts, mean track length, track-length histogram and mean reprojection error.")
+      .def(
+          "summary",
+          [](const Reconstruction& model) { return FromJson(ModelStatisticsToJson(model)); },
+          "Counts, mean track length, track-length histogram and mean reprojection error.")
       .def("__repr__", [](const Reconstruction& model) {
         return "Reconstruction(" + std::to_string(model.NumRegImages()) + "/" +
                std::to_string(model.NumImages()) + " images registered, " +

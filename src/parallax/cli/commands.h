@@ -16,5 +16,6 @@ int RunEvaluate(int argc, char** argv);
 int RunReport(int argc, char** argv);
 int RunUndistort(int argc, char** argv);
 int RunExport(int argc, char** argv);
+int RunModel(int argc, char** argv);
 
 }  // namespace parallax::cli

@@ -24,9 +24,14 @@ namespace fs = std::filesystem;
 // OPENCV's (fx, fy, cx, cy, k1, k2, p1, p2) of any of Parallax's models: the model's own
 // values, zeros where it has none.
 std::array<double, 8> OpenCvParams(const Camera& camera) {
-  std::array<double, 8> opencv = {camera.FocalLengthX(), camera.FocalLengthY(),
-                                  camera.PrincipalPointX(), camera.PrincipalPointY(),
-                                  0, 0, 0, 0};
+  std::array<double, 8> opencv = {camera.FocalLengthX(),
+                                  camera.FocalLengthY(),
+                                  camera.PrincipalPointX(),
+                                  camera.PrincipalPointY(),
+                                  0,
+                                  0,
+                                  0,
+                                  0};
   const std::vector<int> extra = CameraModelExtraIdxs(camera.model_id);
   if (camera.model_id == CameraModelId::kOpenCV) {
     for (int i = 0; i < 4; ++i) opencv[4 + i] = camera.params[extra[i]];
@@ -63,7 +68,8 @@ Eigen::Matrix4d OpenGlCamToWorld(const Rigid3d& cam_from_world) {
 
 nlohmann::json MatrixToJson(const Eigen::Matrix4d& matrix) {
   nlohmann::json rows = nlohmann::json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({matrix(r, 0), matrix(r, 1), matrix(r, 2), matrix(r, 3)});
+  for (int r = 0; r < 4; ++r)
+    rows.push_back({matrix(r, 0), matrix(r, 1), matrix(r, 2), matrix(r, 3)});
   return rows;
 }
 
@@ -127,8 +133,8 @@ void WritePlyWithCameras(const Reconstruction& model, const fs::path& path, doub
     const Rigid3d world_from_cam = image.cam_from_world.Inverse();
     frustum_vertices.push_back(image.ProjectionCenter());
     const double w = static_cast<double>(camera.width), h = static_cast<double>(camera.height);
-    for (const Eigen::Vector2d& corner :
-         {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0), Eigen::Vector2d(w, h), Eigen::Vector2d(0, h)}) {
+    for (const Eigen::Vector2d& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0),
+                                          Eigen::Vector2d(w, h), Eigen::Vector2d(0, h)}) {
       frustum_vertices.push_back(world_from_cam *
                                  (frustum_depth * camera.CamFromImg(corner).homogeneous()));
     }
@@ -181,7 +187,8 @@ void WriteBundler(const Reconstruction& model, const fs::path& bundle_path,
     list << image.name << "\n";
   }
   std::ostringstream bundle;
-  Exact(bundle) << "# Bundle file v0.3\n" << model.NumImages() << " " << model.NumPoints3D() << "\n";
+  Exact(bundle) << "# Bundle file v0.3\n"
+                << model.NumImages() << " " << model.NumPoints3D() << "\n";
   bool approximated = false;
   // Bundler's axes: x right, y up, z back (the camera looks down -z).
   const Eigen::Matrix3d flip = Eigen::Vector3d(1, -1, -1).asDiagonal();
@@ -247,9 +254,8 @@ void WriteNvm(const Reconstruction& model, const fs::path& path) {
   }
   nvm << "\n" << model.NumPoints3D() << "\n";
   for (const auto& [point_id, point] : model.Points3D()) {
-    nvm << point.xyz[0] << " " << point.xyz[1] << " " << point.xyz[2] << " "
-        << int{point.color[0]} << " " << int{point.color[1]} << " " << int{point.color[2]} << " "
-        << point.track.Length();
+    nvm << point.xyz[0] << " " << point.xyz[1] << " " << point.xyz[2] << " " << int{point.color[0]}
+        << " " << int{point.color[1]} << " " << int{point.color[2]} << " " << point.track.Length();
     for (const TrackElement& element : point.track.elements) {
       const Image& image = model.GetImage(element.image_id);
       const Camera& camera = model.GetCamera(image.camera_id);

@@ -129,7 +129,8 @@ TEST(PlyWithCameras, PointsThenAFrustumPerCamera) {
     EXPECT_TRUE(ply.vertices[centre].isApprox(image.ProjectionCenter().cast<float>(), 1e-6f));
     // The corners lie at depth 2 in front of the camera.
     for (size_t corner = 1; corner <= 4; ++corner) {
-      const Eigen::Vector3d in_cam = image.cam_from_world * ply.vertices[centre + corner].cast<double>();
+      const Eigen::Vector3d in_cam =
+          image.cam_from_world * ply.vertices[centre + corner].cast<double>();
       EXPECT_NEAR(in_cam.z(), 2.0, 1e-5);
     }
   }

@@ -339,4 +339,33 @@ std::string MetricsToText(const EvaluationMetrics& metrics) {
   return out.str();
 }
 
+nlohmann::json ModelStatisticsToJson(const Reconstruction& model) {
+  Reconstruction copy = model;
+  nlohmann::json json;
+  json["cameras"] = model.NumCameras();
+  json["images"] = model.NumImages();
+  json["images_registered"] = model.NumRegImages();
+  json["points3D"] = model.NumPoints3D();
+  json["observations"] = model.NumObservations();
+  json["mean_track_length"] = model.ComputeMeanTrackLength();
+  json["track_length_histogram"] = TrackLengthHistogramToJson(model.ComputeTrackLengthHistogram());
+  json["mean_observations_per_image"] = model.ComputeMeanObservationsPerRegImage();
+  json["mean_reprojection_error_px"] = copy.UpdatePointErrors();
+  return json;
+}
+
+Reconstruction AlignToReference(const Reconstruction& model, const GroundTruth& reference,
+                                EvaluationMetrics* metrics) {
+  const EvaluationMetrics evaluation = EvaluateReconstruction(model, reference);
+  if (!evaluation.alignment_success) {
+    throw InputError(reference.source + ": no similarity aligns the model to it (" +
+                     std::to_string(evaluation.num_registered_in_gt) +
+                     " registered images in common; at least 3 that agree are needed)");
+  }
+  Reconstruction aligned = model;
+  aligned.Transform(evaluation.gt_from_model);
+  if (metrics != nullptr) *metrics = evaluation;
+  return aligned;
+}
+
 }  // namespace parallax

@@ -100,6 +100,18 @@ EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const Grou
                                          const EvaluationOptions& options = {});
 
 nlohmann::json MetricsToJson(const EvaluationMetrics& metrics);
+
+// The ground-truth-free numbers of any model (`parallax model analyze`, Python's summary()):
+// cameras, images, registered images, points, observations, mean track length and its
+// histogram, mean observations per registered image, mean reprojection error (recomputed).
+nlohmann::json ModelStatisticsToJson(const Reconstruction& model);
+
+// `model` moved into the frame of `reference` (a ground truth, or another model read as one;
+// images matched by name) by the similarity EvaluateReconstruction fits to the camera
+// centres (`parallax model align`). Throws InputError naming the reference when none could be
+// fitted. `metrics`, when not null, gets that evaluation.
+Reconstruction AlignToReference(const Reconstruction& model, const GroundTruth& reference,
+                                EvaluationMetrics* metrics = nullptr);
 // A readable multi-line table for the terminal.
 std::string MetricsToText(const EvaluationMetrics& metrics);
 

@@ -176,6 +176,45 @@ TEST(EvaluateReconstruction, TooFewCamerasGiveNoAlignment) {
   for (const AccuracyAtThreshold& point : metrics.rotation_accuracy) EXPECT_EQ(point.fraction, 0.0);
 }
 
+// `parallax model align`: the model moved by a similarity comes back onto the reference, points
+// included; a reference it shares too little with is a one-line error naming it.
+TEST(AlignToReference, MovesTheModelOntoTheReference) {
+  const Reconstruction truth = SyntheticTruth(10);
+  Reconstruction model = truth;
+  model.Transform(RandomSim3d());
+  const Reconstruction aligned = AlignToReference(model, GroundTruthOf(truth));
+  for (const auto& [image_id, image] : truth.Images()) {
+    EXPECT_LT((aligned.GetImage(image_id).ProjectionCenter() - image.ProjectionCenter()).norm(),
+              1e-8);
+  }
+  for (const auto& [point3D_id, point] : truth.Points3D()) {
+    EXPECT_LT((aligned.GetPoint3D(point3D_id).xyz - point.xyz).norm(), 1e-8);
+  }
+  Reconstruction two_images = model;
+  const std::vector<image_t> registered = two_images.RegImageIds();
+  for (size_t i = 2; i < registered.size(); ++i) two_images.DeRegisterImage(registered[i]);
+  try {
+    AlignToReference(two_images, GroundTruthOf(truth));
+    FAIL() << "aligned with two images";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("synthetic: no similarity aligns the model"),
+              std::string::npos);
+  }
+}
+
+TEST(ModelStatisticsToJson, CountsWhatTheModelHolds) {
+  const Reconstruction truth = SyntheticTruth(6);
+  const nlohmann::json statistics = ModelStatisticsToJson(truth);
+  EXPECT_EQ(statistics["images_registered"], 6);
+  EXPECT_EQ(statistics["points3D"], truth.NumPoints3D());
+  EXPECT_EQ(statistics["observations"], truth.NumObservations());
+  size_t points = 0;
+  for (const nlohmann::json& bin : statistics["track_length_histogram"])
+    points += bin["points"].get<size_t>();
+  EXPECT_EQ(points, truth.NumPoints3D());
+  EXPECT_NEAR(statistics["mean_track_length"].get<double>(), truth.ComputeMeanTrackLength(), 1e-12);
+}
+
 TEST(EvaluationOptions, CheckRejectsBadThresholds) {
   EvaluationOptions options;
   EXPECT_NO_THROW(options.Check());

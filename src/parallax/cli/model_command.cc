@@ -1,0 +1,94 @@
+// parallax model convert|analyze|align: tools for any COLMAP model.
+#include <iostream>
+
+#include "parallax/cli/cli_common.h"
+#include "parallax/cli/commands.h"
+#include "parallax/report/evaluation.h"
+#include "parallax/report/ground_truth.h"
+#include "parallax/scene/colmap_io.h"
+#include "parallax/util/check.h"
+
+namespace parallax::cli {
+namespace {
+
+void WriteModelAs(const Reconstruction& model, const std::string& type,
+                  const std::filesystem::path& output) {
+  if (type == "bin") {
+    WriteReconstructionBinary(model, output);
+  } else if (type == "txt") {
+    WriteReconstructionText(model, output);
+  } else {
+    WritePointsPly(model, output);
+  }
+}
+
+}  // namespace
+
+int RunModel(int argc, char** argv) {
+  CLI::App app("Tools for any COLMAP model (Parallax's or COLMAP's)", "parallax model");
+  app.require_subcommand(1);
+  VerbosityFlags flags;
+  AddVerbosityFlags(app, &flags);
+
+  std::string input, output, type, reference;
+  bool json = false;
+  CLI::App* convert = app.add_subcommand("convert", "Rewrite a model as binary, text or PLY");
+  convert->add_option("--input", input, "Model folder")->required();
+  convert->add_option("--output", output, "Folder (bin, txt) or file (ply) to write")->required();
+  convert->add_option("--type", type, "bin, txt or ply")
+      ->required()
+      ->check(CLI::IsMember({"bin", "txt", "ply"}));
+
+  CLI::App* analyze = app.add_subcommand(
+      "analyze", "Print a model's numbers: images, points, observations, track lengths, errors");
+  analyze->add_option("input", input, "Model folder")->required();
+  analyze->add_flag("--json", json, "As JSON (the fields of summary.json)");
+
+  CLI::App* align = app.add_subcommand(
+      "align",
+      "Move a model into the frame of a reference (ground truth or another model) by the "
+      "similarity of their camera centres (RANSAC), and write it");
+  align->add_option("--input", input, "Model folder")->required();
+  align->add_option("--reference", reference,
+                    "Ground truth (*_par.txt, a folder of *.camera files) or a model folder; "
+                    "images are matched by name")
+      ->required();
+  align->add_option("--output", output, "Folder of the aligned model (binary and text)")
+      ->required();
+
+  return RunCommand(app, argc, argv, flags, [&] {
+    const Reconstruction model = ReadReconstruction(input);
+    if (*convert) {
+      WriteModelAs(model, type, output);
+      std::cout << "model convert: " << input << " -> " << output << " (" << type << ")\n";
+    } else if (*analyze) {
+      const nlohmann::json statistics = ModelStatisticsToJson(model);
+      if (json) {
+        std::cout << statistics.dump(2) << "\n";
+      } else {
+        for (const auto& [key, value] : statistics.items()) {
+          if (key != "track_length_histogram") std::cout << key << ": " << value << "\n";
+        }
+        std::cout << "points by track length:";
+        for (const nlohmann::json& bin : statistics["track_length_histogram"]) {
+          std::cout << " " << bin["length"] << ":" << bin["points"];
+        }
+        std::cout << "\n";
+      }
+    } else {
+      EvaluationMetrics metrics;
+      const Reconstruction aligned = AlignToReference(model, ReadGroundTruth(reference), &metrics);
+      WriteReconstructionBinary(aligned, output);
+      WriteReconstructionText(aligned, output);
+      std::cout << "model align: scale " << metrics.gt_from_model.scale << ", "
+                << metrics.num_alignment_inliers << "/" << metrics.num_registered_in_gt
+                << " shared images agree; median centre error " << metrics.center_error.median
+                << ", rotation " << metrics.rotation_error_deg.median << " deg -> " << output
+                << "\n";
+    }
+    std::cout << std::flush;
+    return 0;
+  });
+}
+
+}  // namespace parallax::cli
