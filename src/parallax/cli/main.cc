@@ -25,7 +25,7 @@ constexpr Command kCommands[] = {
     {"mapper", "Run the incremental mapper on an existing database", parallax::cli::RunMapper},
     {"evaluate", "Compare a model's camera poses with ground truth", parallax::cli::RunEvaluate},
     {"report", "Write a self-contained HTML report of a run", parallax::cli::RunReport},
-    {"model", "Model tools: convert (bin, txt, ply), analyze, align to a reference",
+    {"model", "Model tools: convert (bin, txt, ply), analyze, align, merge",
      parallax::cli::RunModel},
     {"export", "Write a model for nerfstudio, Bundler, VisualSfM, or as a PLY with cameras",
      parallax::cli::RunExport},

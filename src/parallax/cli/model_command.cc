@@ -1,10 +1,11 @@
-// parallax model convert|analyze|align: tools for any COLMAP model.
+// parallax model convert|analyze|align|merge: tools for any COLMAP model.
 #include <iostream>
 
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/report/evaluation.h"
 #include "parallax/report/ground_truth.h"
+#include "parallax/report/model_union.h"
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
 
@@ -30,7 +31,7 @@ int RunModel(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
 
-  std::string input, output, type, reference;
+  std::string input, output, type, reference, base;
   bool json = false;
   CLI::App* convert = app.add_subcommand("convert", "Rewrite a model as binary, text or PLY");
   convert->add_option("--input", input, "Model folder")->required();
@@ -49,12 +50,22 @@ int RunModel(int argc, char** argv) {
       "Move a model into the frame of a reference (ground truth or another model) by the "
       "similarity of their camera centres (RANSAC), and write it");
   align->add_option("--input", input, "Model folder")->required();
-  align->add_option("--reference", reference,
-                    "Ground truth (*_par.txt, a folder of *.camera files) or a model folder; "
-                    "images are matched by name")
+  align
+      ->add_option("--reference", reference,
+                   "Ground truth (*_par.txt, a folder of *.camera files) or a model folder; "
+                   "images are matched by name")
       ->required();
   align->add_option("--output", output, "Folder of the aligned model (binary and text)")
       ->required();
+
+  CLI::App* merge = app.add_subcommand(
+      "merge",
+      "Add a model to another that shares images with it: it is moved into the other's frame "
+      "by the similarity of the shared camera centres; its other images and their points join");
+  merge->add_option("--input", input, "Model folder to add")->required();
+  merge->add_option("--into", base, "Model folder it joins (its frame and shared poses stay)")
+      ->required();
+  merge->add_option("--output", output, "Folder of the merged model (binary and text)")->required();
 
   return RunCommand(app, argc, argv, flags, [&] {
     const Reconstruction model = ReadReconstruction(input);
@@ -75,6 +86,16 @@ int RunModel(int argc, char** argv) {
         }
         std::cout << "\n";
       }
+    } else if (*merge) {
+      ModelUnionReport report;
+      const Reconstruction united = UniteModels(ReadReconstruction(base), base, model, &report);
+      WriteReconstructionBinary(united, output);
+      WriteReconstructionText(united, output);
+      std::cout << "model merge: " << report.num_shared_images << " shared images ("
+                << report.num_alignment_inliers << " agree, scale " << report.scale << "); "
+                << report.num_images_added << " images and " << report.num_points_added
+                << " points added; " << united.NumRegImages() << " images, " << united.NumPoints3D()
+                << " points -> " << output << "\n";
     } else {
       EvaluationMetrics metrics;
       const Reconstruction aligned = AlignToReference(model, ReadGroundTruth(reference), &metrics);

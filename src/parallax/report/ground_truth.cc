@@ -213,9 +213,12 @@ GroundTruth ReadStrechaGroundTruth(const std::filesystem::path& dir) {
 }
 
 GroundTruth ReadColmapGroundTruth(const std::filesystem::path& dir) {
-  const Reconstruction model = ReadReconstruction(dir);
+  return GroundTruthOfModel(ReadReconstruction(dir), dir.string());
+}
+
+GroundTruth GroundTruthOfModel(const Reconstruction& model, const std::string& source) {
   GroundTruth truth;
-  truth.source = dir.string();
+  truth.source = source;
   for (const auto& [image_id, image] : model.Images()) {
     if (!image.registered) continue;
     GroundTruthImage view;

@@ -7,6 +7,7 @@
 
 #include "parallax/geometry/rigid3.h"
 #include "parallax/scene/camera.h"
+#include "parallax/scene/reconstruction.h"
 
 namespace parallax {
 
@@ -41,6 +42,8 @@ GroundTruth ReadStrechaGroundTruth(const std::filesystem::path& dir);
 
 // A COLMAP model folder (cameras/images/points3D, .bin or .txt); registered images only.
 GroundTruth ReadColmapGroundTruth(const std::filesystem::path& dir);
+// The registered images of a model in memory as a ground truth; `source` names it in messages.
+GroundTruth GroundTruthOfModel(const Reconstruction& model, const std::string& source);
 
 // Detects the format: a file is Middlebury; a folder with *.camera files is Strecha; a
 // folder with cameras.bin or cameras.txt is COLMAP. Throws InputError otherwise.
