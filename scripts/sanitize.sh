@@ -64,6 +64,7 @@ trap 'rm -rf "$scratch"' EXIT
 "$build/parallax" undistort --model "$scratch/out/sparse/0" --images "$scratch/scene" --output "$scratch/dense" -q
 "$build/parallax" model analyze "$scratch/out/sparse/0" --json -q >/dev/null
 "$build/parallax" model align --input "$scratch/out/sparse/0" --reference "$scratch/scene/synth_par.txt" --output "$scratch/aligned" -q
+"$build/parallax" model merge --input "$scratch/aligned" --into "$scratch/out/sparse/0" --output "$scratch/merged" -q
 for format in nerfstudio ply bundler nvm; do
   "$build/parallax" export --model "$scratch/out/sparse/0" --format "$format" --output "$scratch/export-$format/model" -q
 done
