@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "parallax/geometry/look_at.h"
 #include "parallax/scene/reconstruction.h"
 
 namespace parallax::test {
@@ -15,17 +16,6 @@ inline Camera BarrelCamera() {
   Camera camera = Camera::Create(1, CameraModelId::kSimpleRadial, 500, 640, 480);
   camera.params[3] = -0.2;
   return camera;
-}
-
-// cam_from_world of a camera at `center` looking at `target`, image up towards +z.
-inline Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d forward = (target - center).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  Eigen::Matrix3d rotation;
-  rotation.row(0) = right.transpose();
-  rotation.row(1) = forward.cross(right).transpose();
-  rotation.row(2) = forward.transpose();
-  return Rigid3d(rotation, -rotation * center);
 }
 
 inline Rigid3d RingPose(double azimuth_degrees) {

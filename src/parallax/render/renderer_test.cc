@@ -8,21 +8,11 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "parallax/geometry/look_at.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
 namespace {
-
-// cam_from_world of a camera at `center` looking at `target`, image up towards +z.
-Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d forward = (target - center).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  Eigen::Matrix3d rotation;
-  rotation.row(0) = right.transpose();
-  rotation.row(1) = forward.cross(right).transpose();
-  rotation.row(2) = forward.transpose();
-  return Rigid3d(rotation, -rotation * center);
-}
 
 Rigid3d RingPose(double azimuth_degrees) {
   const double azimuth = azimuth_degrees * M_PI / 180.0;

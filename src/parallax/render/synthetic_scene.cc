@@ -9,6 +9,7 @@
 #include <random>
 
 #include "parallax/calibration/exif_writer.h"
+#include "parallax/geometry/look_at.h"
 #include "parallax/image/image_codecs.h"
 #include "parallax/render/covisibility.h"
 #include "parallax/render/procedural_texture.h"
@@ -107,19 +108,6 @@ std::vector<Rigid3d> AerialSurveyPoses(const SyntheticSceneOptions& options, dou
     poses.push_back(CameraLooking(center, forward, flight));
   }
   return poses;
-}
-
-// cam_from_world of a camera at `center` looking at `target`: x right, y down, image up
-// towards world +z.
-Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d forward = (target - center).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Matrix3d rotation;
-  rotation.row(0) = right.transpose();
-  rotation.row(1) = down.transpose();
-  rotation.row(2) = forward.transpose();
-  return Rigid3d(rotation, -rotation * center);
 }
 
 std::string ViewName(int view_idx, bool aerial) {

@@ -20,9 +20,10 @@ TEST(UniteModels, AddsTheImagesAndPointsOfAnOverlappingModel) {
   const std::vector<image_t> ids = truth.RegImageIds();
   Reconstruction base = truth, other = truth;
   for (size_t i = 6; i < ids.size(); ++i) base.DeRegisterImage(ids[i]);  // base: 1-6
-  for (size_t i = 0; i < 3; ++i) other.DeRegisterImage(ids[i]);         // other: 4-10
-  other.Transform(Sim3d(2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
-                        Eigen::Vector3d(4, -1, 2)));
+  for (size_t i = 0; i < 3; ++i) other.DeRegisterImage(ids[i]);          // other: 4-10
+  other.Transform(
+      Sim3d(2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
+            Eigen::Vector3d(4, -1, 2)));
 
   ModelUnionReport report;
   const Reconstruction united = UniteModels(base, "base", other, &report);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "parallax/geometry/essential_matrix.h"
+#include "parallax/geometry/look_at.h"
 #include "parallax/scene/database.h"
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
@@ -37,21 +38,6 @@ class Sampler {
  private:
   std::mt19937_64 engine_;
 };
-
-// cam_from_world of a camera at `center` looking at `target`, x right, y down, image "up"
-// towards world +z.
-Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d forward = (target - center).normalized();
-  Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());
-  if (right.norm() < 1e-9) right = forward.cross(Eigen::Vector3d::UnitY());
-  right.normalize();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Matrix3d rotation;
-  rotation.row(0) = right.transpose();
-  rotation.row(1) = down.transpose();
-  rotation.row(2) = forward.transpose();
-  return Rigid3d(rotation, -rotation * center);
-}
 
 std::vector<Rigid3d> MakeCameraPoses(const SyntheticDatasetOptions& options, Sampler* sampler) {
   std::vector<Rigid3d> poses;
