@@ -49,7 +49,8 @@ TEST(UndistortedCamera, CropsToValidPixelsOrKeepsAllOfThePhoto) {
       EXPECT_LE(source.y(), 480 + 1e-6);
     }
   }
-  // blank_pixels 1: every pixel of the photo lands inside the undistorted image.
+  // blank_pixels 1: every pixel of the photo lands inside the undistorted image (its outer
+  // edge up to half a pixel beyond the border pixels' centres, plus a pixel of rounding).
   UndistortionOptions keep_all;
   keep_all.blank_pixels = 1.0;
   const Camera full = UndistortedCamera(camera, keep_all);
@@ -60,10 +61,10 @@ TEST(UndistortedCamera, CropsToValidPixelsOrKeepsAllOfThePhoto) {
          {Eigen::Vector2d(t * 640, 0), Eigen::Vector2d(t * 640, 480), Eigen::Vector2d(0, t * 480),
           Eigen::Vector2d(640, t * 480)}) {
       const Eigen::Vector2d target = full.ImgFromCam(camera.CamFromImg(pixel).homogeneous());
-      EXPECT_GE(target.x(), -1.0);
-      EXPECT_LE(target.x(), full.width + 1.0);
-      EXPECT_GE(target.y(), -1.0);
-      EXPECT_LE(target.y(), full.height + 1.0);
+      EXPECT_GE(target.x(), -1.5);
+      EXPECT_LE(target.x(), full.width + 1.5);
+      EXPECT_GE(target.y(), -1.5);
+      EXPECT_LE(target.y(), full.height + 1.5);
     }
   }
   // max_image_size scales focal lengths and size together.

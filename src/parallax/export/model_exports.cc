@@ -165,8 +165,8 @@ void WritePlyWithCameras(const Reconstruction& model, const fs::path& path, doub
           const int centre = first + static_cast<int>(5 * camera);
           // Centre to each corner, then around the image rectangle.
           for (int corner = 1; corner <= 4; ++corner) {
-            for (const auto [a, b] : {std::pair{centre, centre + corner},
-                                      std::pair{centre + corner, centre + corner % 4 + 1}}) {
+            for (const auto& [a, b] : {std::pair{centre, centre + corner},
+                                       std::pair{centre + corner, centre + corner % 4 + 1}}) {
               WriteBinary<int32_t>(stream, a);
               WriteBinary<int32_t>(stream, b);
               for (int c = 0; c < 3; ++c) WriteBinary<uint8_t>(stream, c == 0 ? 255 : 0);
