@@ -28,6 +28,8 @@ void WriteModelAs(const Reconstruction& model, const std::string& type,
 int RunModel(int argc, char** argv) {
   CLI::App app("Tools for any COLMAP model (Parallax's or COLMAP's)", "parallax model");
   app.require_subcommand(1);
+  // -q and -v are the group's: subcommands pass them up (`parallax model analyze M -q`).
+  app.fallthrough();
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
 

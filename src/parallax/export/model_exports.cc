@@ -276,18 +276,19 @@ void WriteNvm(const Reconstruction& model, const fs::path& path) {
 void ExportModel(const Reconstruction& model, const std::string& format, const fs::path& path,
                  const NerfstudioExportOptions& nerfstudio) {
   const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  if (format != "nerfstudio" && format != "ply" && format != "bundler" && format != "nvm") {
+    throw InputError("--format: unknown export format '" + format +
+                     "' (expected nerfstudio, ply, bundler or nvm)");
+  }
+  CreateDirectoryOrThrow(folder);
   if (format == "nerfstudio") {
     WriteNerfstudio(model, path, nerfstudio);
   } else if (format == "ply") {
     WritePlyWithCameras(model, path);
   } else if (format == "bundler") {
-    CreateDirectoryOrThrow(folder);
     WriteBundler(model, path, folder / "list.txt");
-  } else if (format == "nvm") {
-    WriteNvm(model, path);
   } else {
-    throw InputError("--format: unknown export format '" + format +
-                     "' (expected nerfstudio, ply, bundler or nvm)");
+    WriteNvm(model, path);
   }
 }
 
