@@ -50,15 +50,25 @@ def plot_reprojection_errors(summary, path):
 
 
 def plot_trajectory(model, path):
-    centers = model.projection_centers()
+    # Centres in the order the photos were taken (their names), as the paper draws the path.
+    ids = sorted(model.reg_image_ids(), key=lambda image_id: model.images[image_id].name)
+    centers = model.projection_centers()[[model.reg_image_ids().index(i) for i in ids]]
     xyz = model.point3D_xyz()
     colors = model.point3D_colors() / 255.0
     keep = np.linalg.norm(xyz - np.median(xyz, axis=0), axis=1) < 3 * np.linalg.norm(
         centers - centers.mean(axis=0), axis=1).mean()
+    # The model's frame is arbitrary: shown in the cameras' principal axes, whose last one is
+    # the normal of the plane they move in, so that plane is the plot's ground.
+    mean = centers.mean(axis=0)
+    axes_of_motion = np.linalg.svd(centers - mean)[2]
+    centers, xyz = (centers - mean) @ axes_of_motion.T, (xyz - mean) @ axes_of_motion.T
     figure = plt.figure(figsize=(7, 7))
     axes = figure.add_subplot(projection="3d")
     axes.scatter(*xyz[keep].T, c=colors[keep], s=0.5)
     axes.plot(*centers.T, "-o", color="tab:red", markersize=3, label="camera centres")
+    # The same scale on every axis, so the scene keeps its shape.
+    extent = np.vstack([xyz[keep], centers])
+    axes.set_box_aspect(np.ptp(extent, axis=0))
     axes.set_title(f"{model.num_reg_images()} cameras, {model.num_points3D()} points")
     axes.legend()
     figure.savefig(path, dpi=120)
