@@ -18,8 +18,8 @@ size_t CompletePoint(const TrackTriangulationOptions& options, point3D_t point3D
   // points are their own points' business (merging), and those of images not registered yet
   // cannot join; walking through either would spread over the whole graph where wrong
   // matches link points.
-  // Keypoints of the point itself are recognised through their image, so `visited` holds
-  // only the others (most correspondences lead back into the point).
+  // Keypoints of the point itself are not free, so `visited` holds only the others (most
+  // correspondences lead back into the point).
   std::vector<TrackElement> frontier = point.track.elements;
   std::vector<TrackElement> visited;
   std::vector<TrackElement> next;
@@ -29,14 +29,10 @@ size_t CompletePoint(const TrackTriangulationOptions& options, point3D_t point3D
     for (const TrackElement& element : frontier) {
       for (const TrackElement& other :
            model->Graph().CorrespondencesOf(element.image_id, element.point2D_idx)) {
-        const Image* image = model->FindImage(other.image_id);
-        if (image == nullptr) continue;
-        const point3D_t other_point = image->points2D[other.point2D_idx].point3D_id;
-        if (other_point == point3D_id ||
+        if (!model->IsFree(other) ||
             std::find(visited.begin(), visited.end(), other) != visited.end()) {
           continue;
         }
-        if (other_point != kInvalidPoint3DId || !image->registered) continue;
         visited.push_back(other);
         next.push_back(other);
         if (point.track.ContainsImage(other.image_id)) continue;
