@@ -3,6 +3,7 @@
 #include "parallax/image/image_reader.h"
 #include "parallax/report/ground_truth.h"
 #include "parallax/report/html_report.h"
+#include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
@@ -29,16 +30,6 @@ void SetSeedAndThreads(uint64_t seed, int num_threads, bool keep_ba_threads,
     ba->num_threads = num_threads;
   }
 }
-
-namespace {
-
-bool HasModelFiles(const std::filesystem::path& dir) {
-  std::error_code error;
-  return std::filesystem::exists(dir / "cameras.bin", error) ||
-         std::filesystem::exists(dir / "cameras.txt", error);
-}
-
-}  // namespace
 
 ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipelineOptions& options,
                                                        const std::filesystem::path& image_dir,
@@ -95,7 +86,7 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   const std::filesystem::path earlier_model = output_dir / "sparse" / "0";
   if (options.extend_model_with_new_photos && mapping.input_model.empty() &&
       mapping.mapper_type == MapperType::kIncremental && mapping.cluster_file.empty() &&
-      result.extraction.num_extracted > 0 && HasModelFiles(earlier_model)) {
+      result.extraction.num_extracted > 0 && HasColmapModel(earlier_model)) {
     mapping.input_model = earlier_model;
     PARALLAX_LOG(Info) << "mapping: " << result.extraction.num_extracted
                        << " new photos are registered into the earlier run's model ("

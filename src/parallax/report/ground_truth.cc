@@ -236,10 +236,7 @@ GroundTruth ReadGroundTruth(const std::filesystem::path& path) {
   if (!std::filesystem::is_directory(path, error)) {
     throw MissingFileError(path.string() + ": no such file or folder");
   }
-  if (std::filesystem::exists(path / "cameras.bin", error) ||
-      std::filesystem::exists(path / "cameras.txt", error)) {
-    return ReadColmapGroundTruth(path);
-  }
+  if (HasColmapModel(path)) return ReadColmapGroundTruth(path);
   for (const auto& entry : std::filesystem::directory_iterator(path, error)) {
     if (entry.path().extension() == ".camera") return ReadStrechaGroundTruth(path);
   }

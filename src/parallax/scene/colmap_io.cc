@@ -626,6 +626,12 @@ void WriteReconstructionBinary(const Reconstruction& reconstruction,
       [&](std::ostream& stream) { WritePoints3DBinary(reconstruction, stream); }, true);
 }
 
+bool HasColmapModel(const std::filesystem::path& dir) {
+  std::error_code error;
+  return std::filesystem::exists(dir / "cameras.bin", error) ||
+         std::filesystem::exists(dir / "cameras.txt", error);
+}
+
 Reconstruction ReadReconstruction(const std::filesystem::path& dir) {
   Reconstruction reconstruction;
   std::error_code error;

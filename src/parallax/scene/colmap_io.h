@@ -38,6 +38,9 @@ void WriteReconstructionText(const Reconstruction& reconstruction,
                              const std::filesystem::path& dir);
 void WriteReconstructionBinary(const Reconstruction& reconstruction,
                                const std::filesystem::path& dir);
+// Whether `dir` holds a model (cameras.bin or cameras.txt), without reading it.
+bool HasColmapModel(const std::filesystem::path& dir);
+
 // Reads a model folder, binary if cameras.bin exists, else text.
 Reconstruction ReadReconstruction(const std::filesystem::path& dir);
 
