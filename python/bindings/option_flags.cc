@@ -34,12 +34,12 @@ std::string PythonType(const CLI::Option& option) {
 }
 
 // The command-line text of one value: lists joined by commas, paths as paths.
-std::string ValueText(const std::string& keyword, const py::handle& value) {
+std::string ValueText(const py::handle& value) {
   if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
     std::string text;
     for (const py::handle item : value) {
       if (!text.empty()) text += ",";
-      text += ValueText(keyword, item);
+      text += ValueText(item);
     }
     return text;
   }
@@ -89,7 +89,7 @@ void ParseKeywordOptions(const std::string& function_name, const py::kwargs& opt
       throw py::type_error(function_name + "(): " + keyword + " takes True or False");
     }
     args.push_back(flag);
-    args.push_back(ValueText(keyword, value));
+    args.push_back(ValueText(value));
   }
   std::reverse(args.begin(), args.end());  // CLI11 takes the arguments last first.
   try {

@@ -29,33 +29,39 @@ struct ReconstructionRunResult {
   py::object report_path = py::none();
 };
 
+template <typename Options>
+using AddOptionFlags = void (*)(CLI::App&, Options*);
+
+// The flags of `add_flags` as AddFlags, bound to options that are never parsed into (for the
+// docstrings and stubs; the defaults they show are the options' own).
+template <typename Options>
+AddFlags FlagsOf(AddOptionFlags<Options> add_flags) {
+  return [add_flags](CLI::App& app) {
+    static Options options;
+    add_flags(app, &options);
+  };
+}
+
 // Each function's flags, as `parallax features|match|mapper|reconstruct` has them.
 const std::map<std::string, AddFlags>& FunctionFlags() {
   static const auto* flags = new std::map<std::string, AddFlags>{
-      {"extract_features",
-       [](CLI::App& app) {
-         static ExtractionStageOptions options;
-         cli::AddExtractionOptions(app, &options);
-       }},
-      {"match",
-       [](CLI::App& app) {
-         static MatchingStageOptions options;
-         cli::AddMatchingOptions(app, &options);
-       }},
-      {"map",
-       [](CLI::App& app) {
-         static MappingStageOptions options;
-         cli::AddMapperOptions(app, &options);
-       }},
-      {"reconstruct",
-       [](CLI::App& app) {
-         static ReconstructionPipelineOptions options;
-         cli::AddExtractionOptions(app, &options.extraction);
-         cli::AddMatchingOptions(app, &options.matching);
-         cli::AddMapperOptions(app, &options.mapping);
-       }},
+      {"extract_features", FlagsOf<ExtractionStageOptions>(cli::AddExtractionOptions)},
+      {"match", FlagsOf<MatchingStageOptions>(cli::AddMatchingOptions)},
+      {"map", FlagsOf<MappingStageOptions>(cli::AddMapperOptions)},
+      {"reconstruct", FlagsOf<ReconstructionPipelineOptions>(cli::AddReconstructionOptions)},
   };
   return *flags;
+}
+
+// Default options with `function`'s keyword arguments parsed into them as `add_flags`' flags.
+template <typename Options>
+Options ParseOptions(const std::string& function, const py::kwargs& kwargs,
+                     AddOptionFlags<Options> add_flags) {
+  Options options;
+  CLI::App app;
+  add_flags(app, &options);
+  ParseKeywordOptions(function, kwargs, app);
+  return options;
 }
 
 std::string Doc(const std::string& function, const std::string& summary) {
@@ -70,10 +76,8 @@ std::string Doc(const std::string& function, const std::string& summary) {
 ExtractionStageResult ExtractFeatures(const fs::path& image_dir, const fs::path& database,
                                       int threads, const py::object& progress,
                                       const py::kwargs& kwargs) {
-  ExtractionStageOptions options;
-  CLI::App app;
-  cli::AddExtractionOptions(app, &options);
-  ParseKeywordOptions("extract_features", kwargs, app);
+  ExtractionStageOptions options =
+      ParseOptions<ExtractionStageOptions>("extract_features", kwargs, cli::AddExtractionOptions);
   options.num_threads = threads;
   ExtractionStageResult result;
   RunReleasingGil([&] { result = ExtractFeaturesIntoDatabase(options, image_dir, database); },
@@ -83,10 +87,8 @@ ExtractionStageResult ExtractFeatures(const fs::path& image_dir, const fs::path&
 
 MatchingStageResult Match(const fs::path& database, int threads, uint64_t seed,
                           const py::object& progress, const py::kwargs& kwargs) {
-  MatchingStageOptions options;
-  CLI::App app;
-  cli::AddMatchingOptions(app, &options);
-  ParseKeywordOptions("match", kwargs, app);
+  MatchingStageOptions options =
+      ParseOptions<MatchingStageOptions>("match", kwargs, cli::AddMatchingOptions);
   options.num_threads = threads;
   options.geometry.ransac.random_seed = seed;
   MatchingStageResult result;
@@ -97,10 +99,8 @@ MatchingStageResult Match(const fs::path& database, int threads, uint64_t seed,
 std::vector<Reconstruction> Map(const fs::path& database, const fs::path& image_dir,
                                 const fs::path& output_dir, uint64_t seed,
                                 const py::object& progress, const py::kwargs& kwargs) {
-  MappingStageOptions options;
-  CLI::App app;
-  cli::AddMapperOptions(app, &options);
-  ParseKeywordOptions("map", kwargs, app);
+  MappingStageOptions options =
+      ParseOptions<MappingStageOptions>("map", kwargs, cli::AddMapperOptions);
   options.mapper.absolute_pose.ransac.random_seed = seed;
   MappingStageResult result;
   RunReleasingGil([&] { result = MapDatabase(options, database, image_dir, output_dir); },
@@ -116,12 +116,8 @@ ReconstructionRunResult Reconstruct(const fs::path& image_dir, const fs::path& o
                                     const std::optional<fs::path>& ground_truth, bool report,
                                     bool remap, int threads, uint64_t seed,
                                     const py::object& progress, const py::kwargs& kwargs) {
-  ReconstructionPipelineOptions options;
-  CLI::App app;
-  cli::AddExtractionOptions(app, &options.extraction);
-  cli::AddMatchingOptions(app, &options.matching);
-  cli::AddMapperOptions(app, &options.mapping);
-  ParseKeywordOptions("reconstruct", kwargs, app);
+  ReconstructionPipelineOptions options = ParseOptions<ReconstructionPipelineOptions>(
+      "reconstruct", kwargs, cli::AddReconstructionOptions);
   SetSeedAndThreads(seed, threads, kwargs.contains("ba_threads"), &options);
   options.database_path = database.value_or(fs::path());
   options.ground_truth_path = ground_truth.value_or(fs::path());

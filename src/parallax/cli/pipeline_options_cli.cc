@@ -1,5 +1,6 @@
 #include "parallax/cli/pipeline_options_cli.h"
 
+#include "parallax/cli/mapper_options_cli.h"
 #include "parallax/pipeline/camera_setup.h"
 
 namespace parallax::cli {
@@ -136,6 +137,12 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
                  "Geometric verification RANSAC threshold, pixels")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+}
+
+void AddReconstructionOptions(CLI::App& app, ReconstructionPipelineOptions* options) {
+  AddExtractionOptions(app, &options->extraction);
+  AddMatchingOptions(app, &options->matching);
+  AddMapperOptions(app, &options->mapping);
 }
 
 }  // namespace parallax::cli

@@ -5,6 +5,7 @@
 
 #include "parallax/pipeline/extraction_stage.h"
 #include "parallax/pipeline/matching_stage.h"
+#include "parallax/pipeline/reconstruction_pipeline.h"
 
 namespace parallax::cli {
 
@@ -13,5 +14,7 @@ namespace parallax::cli {
 // mapper's.
 void AddExtractionOptions(CLI::App& app, ExtractionStageOptions* options);
 void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options);
+// The three stages' flags together, as `reconstruct` (and Python's reconstruct) takes them.
+void AddReconstructionOptions(CLI::App& app, ReconstructionPipelineOptions* options);
 
 }  // namespace parallax::cli

@@ -31,9 +31,7 @@ int RunReconstruct(int argc, char** argv) {
   app.add_flag("!--remap", options.extend_model_with_new_photos,
                "Map all photos from scratch even when OUT holds the model of an earlier run and "
                "only photos were added (default: the new photos are registered into it)");
-  AddExtractionOptions(app, &options.extraction);
-  AddMatchingOptions(app, &options.matching);
-  AddMapperOptions(app, &options.mapping);
+  AddReconstructionOptions(app, &options);
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
