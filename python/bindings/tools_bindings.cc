@@ -78,7 +78,6 @@ Reconstruction Synthesize(const fs::path& output_dir, int views, const std::stri
   options.gps_noise = gps_noise;
   options.name = name;
   options.num_threads = threads;
-  options.Check();
   Reconstruction scene;
   RunReleasingGil([&] { scene = GenerateSyntheticScene(options, output_dir); }, progress);
   return scene;
@@ -93,7 +92,6 @@ int Undistort(const py::object& model, const fs::path& image_dir, const fs::path
   options.blank_pixels = blank_pixels;
   options.jpeg_quality = jpeg_quality;
   options.num_threads = threads;
-  options.Check();
   UndistortionResult result;
   RunReleasingGil(
       [&] { result = WriteUndistortedWorkspace(reconstruction, image_dir, output_dir, options); },
@@ -106,9 +104,6 @@ py::dict Calibrate(const fs::path& image_dir, const std::pair<int, int>& pattern
                    const std::optional<fs::path>& output,
                    const std::optional<std::pair<int, int>>& size, bool k3, bool sector_based,
                    int threads) {
-  if (!fs::is_directory(image_dir)) {
-    throw MissingFileError(image_dir.string() + ": image folder does not exist");
-  }
   CheckerboardCalibrationOptions options;
   std::tie(options.pattern_cols, options.pattern_rows) = pattern;
   if (size) std::tie(options.required_width, options.required_height) = *size;
@@ -116,11 +111,7 @@ py::dict Calibrate(const fs::path& image_dir, const std::pair<int, int>& pattern
   options.fit_k3 = k3;
   options.use_sector_based_detector = sector_based;
   options.num_threads = threads;
-  options.Check();
   const std::vector<fs::path> paths = ListCalibrationImages(image_dir);
-  if (paths.empty()) {
-    throw InputError(image_dir.string() + ": no images (.jpg, .jpeg, .png, .tif, .tiff, .bmp)");
-  }
   CheckerboardCalibrationResult result;
   {
     py::gil_scoped_release release;

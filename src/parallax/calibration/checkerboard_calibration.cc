@@ -394,6 +394,9 @@ CalibratedCamera CalibratedCameraFromResult(const CheckerboardCalibrationResult&
 std::vector<std::filesystem::path> ListCalibrationImages(const std::filesystem::path& dir) {
   static const std::set<std::string> kExtensions = {".jpg", ".jpeg", ".png",
                                                     ".tif", ".tiff", ".bmp"};
+  if (!std::filesystem::is_directory(dir)) {
+    throw MissingFileError(dir.string() + ": image folder does not exist");
+  }
   std::vector<std::filesystem::path> paths;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     if (!entry.is_regular_file()) continue;
@@ -401,6 +404,9 @@ std::vector<std::filesystem::path> ListCalibrationImages(const std::filesystem::
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return std::tolower(c); });
     if (kExtensions.count(extension)) paths.push_back(entry.path());
+  }
+  if (paths.empty()) {
+    throw InputError(dir.string() + ": no images (.jpg, .jpeg, .png, .tif, .tiff, .bmp)");
   }
   std::sort(paths.begin(), paths.end());
   return paths;

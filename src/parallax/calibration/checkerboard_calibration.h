@@ -109,7 +109,8 @@ CheckerboardCalibrationResult CalibrateFromCheckerboards(
     const std::vector<std::filesystem::path>& image_paths);
 
 // The photos of a calibration folder: files named .jpg, .jpeg, .png, .tif, .tiff or .bmp (any
-// case; decoding tells the rest), sorted by name.
+// case; decoding tells the rest), sorted by name. Throws MissingFileError when the folder does
+// not exist and InputError when it holds no such file, each naming the folder.
 std::vector<std::filesystem::path> ListCalibrationImages(const std::filesystem::path& dir);
 
 // The result as a camera.json record.

@@ -100,11 +100,8 @@ int RunCalibrate(int argc, char** argv) {
     options.use_sector_based_detector = sector_based;
     options.num_threads = num_threads;
 
-    const std::vector<std::filesystem::path> paths = ListCalibrationImages(images_dir);
-    if (paths.empty()) {
-      throw InputError(images_dir + ": no images (.jpg, .jpeg, .png, .tif, .tiff, .bmp)");
-    }
-    const CheckerboardCalibrationResult result = CalibrateFromCheckerboards(options, paths);
+    const CheckerboardCalibrationResult result =
+        CalibrateFromCheckerboards(options, ListCalibrationImages(images_dir));
     std::cout << "Calibrating " << pattern << " chessboard (inner corners) photos in " << images_dir
               << "\n";
     PrintImages(result);
