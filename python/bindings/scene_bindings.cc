@@ -133,6 +133,20 @@ void BindRigid3d(py::module_& m) {
       });
 }
 
+// Sets a camera's parameters, refusing a count its model does not take or a value that is not
+// finite (Camera::VerifyParams), with the reason.
+void SetCameraParams(Camera* camera, const std::vector<double>& params) {
+  const int expected = CameraModelNumParams(camera->model_id);
+  if (params.size() != static_cast<size_t>(expected)) {
+    throw py::value_error("params: " + camera->ModelName() + " takes " + std::to_string(expected) +
+                          " parameters, got " + std::to_string(params.size()));
+  }
+  Camera candidate = *camera;
+  candidate.params = params;
+  if (!candidate.VerifyParams()) throw py::value_error("params: not all finite");
+  camera->params = params;
+}
+
 void BindCamera(py::module_& m) {
   py::class_<Camera>(m, "Camera", "Intrinsics of one camera, in COLMAP's camera models.")
       .def(py::init([](const std::string& model, size_t width, size_t height,
@@ -144,12 +158,7 @@ void BindCamera(py::module_& m) {
              }
              camera.width = width;
              camera.height = height;
-             camera.params = params;
-             if (!camera.VerifyParams()) {
-               throw py::value_error("params: " + model + " takes " +
-                                     std::to_string(CameraModelNumParams(camera.model_id)) +
-                                     " parameters, got " + std::to_string(params.size()));
-             }
+             SetCameraParams(&camera, params);
              return camera;
            }),
            py::arg("model"), py::arg("width"), py::arg("height"), py::arg("params"))
@@ -161,12 +170,7 @@ void BindCamera(py::module_& m) {
       .def_property(
           "params", [](const Camera& camera) { return camera.params; },
           [](Camera& camera, const std::vector<double>& params) {
-            if (params.size() != static_cast<size_t>(CameraModelNumParams(camera.model_id))) {
-              throw py::value_error("params: " + camera.ModelName() + " takes " +
-                                    std::to_string(CameraModelNumParams(camera.model_id)) +
-                                    " parameters");
-            }
-            camera.params = params;
+            SetCameraParams(&camera, params);
           },
           "Parameters in the model's order (COLMAP's).")
       .def_readwrite("has_prior_focal_length", &Camera::has_prior_focal_length)

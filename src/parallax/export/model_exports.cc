@@ -32,13 +32,10 @@ std::array<double, 8> OpenCvParams(const Camera& camera) {
                                   0,
                                   0,
                                   0};
+  // Every model's extra parameters are OPENCV's first ones, in order: SIMPLE_RADIAL's k and
+  // RADIAL's k1, k2 are k1 (and k2); OPENCV's are k1, k2, p1, p2.
   const std::vector<int> extra = CameraModelExtraIdxs(camera.model_id);
-  if (camera.model_id == CameraModelId::kOpenCV) {
-    for (int i = 0; i < 4; ++i) opencv[4 + i] = camera.params[extra[i]];
-  } else {
-    // SIMPLE_RADIAL's k and RADIAL's k1, k2 are OPENCV's k1, k2.
-    for (size_t i = 0; i < extra.size(); ++i) opencv[4 + i] = camera.params[extra[i]];
-  }
+  for (size_t i = 0; i < extra.size(); ++i) opencv[4 + i] = camera.params[extra[i]];
   return opencv;
 }
 
