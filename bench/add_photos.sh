@@ -5,8 +5,9 @@
 #
 #   bench/add_photos.sh [RUNS]
 #
-# Prints, per run: the mapping time of the rerun and of the run from scratch, the images
-# registered, and the median centre and rotation errors against the ground truth.
+# Prints, per run: the mapping time of the rerun and of the run from scratch (and their
+# ratio), the images registered, and the median centre and rotation errors against the
+# ground truth.
 # Environment: PARALLAX_DATA, PARALLAX_BINARY, BENCH_OUT (default a temporary folder).
 set -euo pipefail
 
@@ -43,4 +44,9 @@ for run in $(seq 1 "$runs"); do
   echo "run $run, 10 added:       $(describe "$added/out")"
   "$binary" reconstruct --images "$data/images" --output "$scratch" --intrinsics "$out/K.txt" -q >/dev/null
   echo "run $run, 47 from scratch: $(describe "$scratch")"
+  python3 - "$added/out/summary.json" "$scratch/summary.json" <<'PY'
+import json, sys
+added, scratch = (json.load(open(path))["timings_s"]["mapping"] for path in sys.argv[1:])
+print(f"mapping time, 10 added / 47 from scratch: {added / scratch:.2f}")
+PY
 done

@@ -59,24 +59,13 @@ TEST(IncrementalMapper, NoisyHemisphereWithDistortion) {
   EXPECT_LT(errors.max_rotation_deg, 0.1);
 }
 
-TEST(IncrementalMapper, ExtendsASeedOfKnownPosesToTheWholeScene) {
-  SyntheticDatasetOptions options;
-  options.num_images = 16;
-  options.num_points3D = 400;
-  options.min_track_length = 3;
-  options.point2D_noise_stddev = 0.3;
-  options.seed = 5;
-  Reconstruction truth;
-  SynthesizeDataset(options, &truth);
-  const MapperInput input = InputFromTruth(truth);
-  // The seed: the first six images with their true poses in a frame of its own (scaled,
-  // turned and moved), and no points.
-  const Sim3d seed_from_truth(
-      2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
-      Eigen::Vector3d(4, -1, 2));
+// The first `num_seed_images` images of `truth` with their true poses in a frame of their
+// own (`seed_from_truth`: scaled, turned and moved), and no points.
+Reconstruction SeedOfFirstImages(const Reconstruction& truth, image_t num_seed_images,
+                                 const Sim3d& seed_from_truth) {
   Reconstruction seed;
   for (const auto& [camera_id, camera] : truth.Cameras()) seed.AddCamera(camera);
-  for (image_t image_id = 1; image_id <= 6; ++image_id) {
+  for (image_t image_id = 1; image_id <= num_seed_images; ++image_id) {
     Image image = truth.GetImage(image_id);
     image.cam_from_world = TransformCameraPose(seed_from_truth, image.cam_from_world);
     for (Point2D& point2D : image.points2D) point2D.point3D_id = kInvalidPoint3DId;
@@ -84,6 +73,29 @@ TEST(IncrementalMapper, ExtendsASeedOfKnownPosesToTheWholeScene) {
     seed.AddImage(image);
     seed.RegisterImage(image_id);
   }
+  return seed;
+}
+
+SyntheticDatasetOptions NoisyRingOptions() {
+  SyntheticDatasetOptions options;
+  options.num_images = 16;
+  options.num_points3D = 400;
+  options.min_track_length = 3;
+  options.point2D_noise_stddev = 0.3;
+  options.seed = 5;
+  return options;
+}
+
+const Sim3d kSeedFromTruth(
+    2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
+    Eigen::Vector3d(4, -1, 2));
+
+TEST(IncrementalMapper, ExtendsASeedOfKnownPosesToTheWholeScene) {
+  const SyntheticDatasetOptions options = NoisyRingOptions();
+  Reconstruction truth;
+  SynthesizeDataset(options, &truth);
+  const MapperInput input = InputFromTruth(truth);
+  const Reconstruction seed = SeedOfFirstImages(truth, 6, kSeedFromTruth);
 
   MapperSummary summary;
   IncrementalMapper mapper(IncrementalMapperOptions(), input);
@@ -96,12 +108,43 @@ TEST(IncrementalMapper, ExtendsASeedOfKnownPosesToTheWholeScene) {
     EXPECT_LT((models[0].GetImage(image_id).ProjectionCenter() -
                seed.GetImage(image_id).ProjectionCenter())
                   .norm(),
-              1e-2 * seed_from_truth.scale * options.camera_distance)
+              1e-2 * kSeedFromTruth.scale * options.camera_distance)
         << image_id;
   }
   const PoseErrors errors = CompareToTruth(models[0], truth);
   EXPECT_LT(errors.max_rotation_deg, 0.05);
   EXPECT_LT(errors.max_center_error, 1e-3 * options.camera_distance);
+  // Ten new images outnumber the seed's six: global adjustments as the model grows, and the
+  // final one's refinement rounds, as in a run from scratch.
+  EXPECT_GE(summary.num_global_ba, 2u);
+}
+
+// A few photos added to a finished model: each is settled by a local adjustment, then one
+// global round, and the model is as accurate as one mapped from scratch.
+TEST(IncrementalMapper, FewImagesAddedToASeedGetLocalThenOneGlobalAdjustment) {
+  const SyntheticDatasetOptions options = NoisyRingOptions();
+  Reconstruction truth;
+  SynthesizeDataset(options, &truth);
+  const MapperInput input = InputFromTruth(truth);
+  const Reconstruction seed = SeedOfFirstImages(truth, 12, kSeedFromTruth);
+
+  MapperSummary summary;
+  IncrementalMapper mapper(IncrementalMapperOptions(), input);
+  const std::vector<Reconstruction> models = mapper.Extend(seed, &summary);
+  ASSERT_EQ(models.size(), 1u);
+  EXPECT_EQ(models[0].NumRegImages(), truth.NumRegImages());
+  EXPECT_EQ(summary.num_local_ba, 4u);
+  EXPECT_EQ(summary.num_global_ba, 1u);
+
+  MapperSummary scratch_summary;
+  IncrementalMapper scratch_mapper(IncrementalMapperOptions(), input);
+  const std::vector<Reconstruction> scratch = scratch_mapper.Reconstruct(&scratch_summary);
+  ASSERT_EQ(scratch.size(), 1u);
+  const PoseErrors errors = CompareToTruth(models[0], truth);
+  const PoseErrors scratch_errors = CompareToTruth(scratch[0], truth);
+  EXPECT_LT(errors.max_rotation_deg, std::max(0.05, 1.1 * scratch_errors.max_rotation_deg));
+  EXPECT_LT(errors.max_center_error,
+            std::max(1e-3 * options.camera_distance, 1.1 * scratch_errors.max_center_error));
 }
 
 TEST(IncrementalMapper, UnrelatedImagesGiveNoModelAndReasons) {
