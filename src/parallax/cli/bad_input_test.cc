@@ -360,19 +360,9 @@ TEST_F(BadInputTest, OutputFolderThatCannotBeCreatedFailsBeforeAnyWork) {
 
 TEST_F(BadInputTest, UnwritableOutputFolderFailsWithOneLine) {
   CopyViews(2);
-  // A folder nobody may write in: chmod 0555, or for root, whom permissions do not stop, a
-  // sysfs folder (read-only for everyone).
-  fs::path parent = dir_->path() / "read_only";
-  if (geteuid() == 0) {
-    parent = "/sys/kernel";
-    std::error_code error;
-    if (!fs::is_directory(parent) || fs::create_directory(parent / "parallax_probe", error)) {
-      GTEST_SKIP() << "no read-only folder for root";
-    }
-  } else {
-    fs::create_directories(parent);
-    fs::permissions(parent, fs::perms::owner_read | fs::perms::owner_exec);
-  }
+  const std::optional<fs::path> unwritable = test::UnwritableFolder(*dir_);
+  if (!unwritable) GTEST_SKIP() << "no read-only folder for root";
+  const fs::path parent = *unwritable;
   // The output folder exists but is read-only: the run's lock file, the first thing it
   // writes there, cannot be created.
   const ProcessResult existing =
@@ -384,7 +374,6 @@ TEST_F(BadInputTest, UnwritableOutputFolderFailsWithOneLine) {
   const ProcessResult missing =
       Run({"reconstruct", "--images", images_.string(), "--output", out.string()});
   ExpectFailsWithOneLineError(missing, out.string(), "cannot create output folder");
-  if (geteuid() != 0) fs::permissions(parent, fs::perms::owner_all);
 }
 
 // ---------------------------------------------------------------------------------------

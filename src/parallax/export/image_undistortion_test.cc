@@ -177,5 +177,28 @@ TEST_F(WorkspaceTest, BadPhotosAreOneLineErrorsAndLeaveNoModel) {
   EXPECT_FALSE(fs::exists(out / "sparse"));
 }
 
+// An output that cannot be written, in a folder that is a file or read-only: the error says
+// which folder and why, and nothing of a workspace is left.
+TEST_F(WorkspaceTest, UnwritableOutputIsAOneLineErrorAndLeavesNothing) {
+  WriteFileAtomically(
+      dir_.path() / "a_file", [](std::ostream& stream) { stream << "not a folder\n"; }, true);
+  std::vector<fs::path> outputs = {dir_.path() / "a_file" / "dense"};
+  const std::optional<fs::path> unwritable = test::UnwritableFolder(dir_);
+  if (unwritable) outputs.push_back(*unwritable);
+  for (const fs::path& out : outputs) {
+    try {
+      WriteUndistortedWorkspace(model_, dir_.path() / "photos", out, {});
+      FAIL() << "no error for " << out;
+    } catch (const InputError& error) {
+      const std::string message = error.what();
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+      EXPECT_NE(message.find(out.string()), std::string::npos) << message;
+      EXPECT_NE(message.find("cannot create output folder"), std::string::npos) << message;
+    }
+    EXPECT_FALSE(fs::exists(out / "sparse"));
+    EXPECT_FALSE(fs::exists(out / "images"));
+  }
+}
+
 }  // namespace
 }  // namespace parallax

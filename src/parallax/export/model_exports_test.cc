@@ -5,7 +5,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "parallax/export/model_export_format.h"
 #include "parallax/export/test_models.h"
+#include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/test_dir.h"
 
@@ -252,6 +254,31 @@ TEST(Nvm, MeasurementsReprojectThroughTheCameras) {
   for (double& value : values) radial >> value;
   radial >> r;
   EXPECT_NEAR(r, 0.2 / (500.0 * 500.0), 1e-15);
+}
+
+// Every format into a folder that is a file or read-only: one line naming the path, no file.
+TEST(ExportModel, UnwritableOutputIsAOneLineErrorAndWritesNothing) {
+  const test::ScopedTestDir dir("export_unwritable");
+  WriteFileAtomically(
+      dir.path() / "a_file", [](std::ostream& stream) { stream << "not a folder\n"; }, true);
+  std::vector<fs::path> folders = {dir.path() / "a_file"};
+  const std::optional<fs::path> unwritable = test::UnwritableFolder(dir);
+  if (unwritable) folders.push_back(*unwritable);
+  const Reconstruction model = ExactModel();
+  for (const fs::path& folder : folders) {
+    for (const std::string format : {"nerfstudio", "ply", "bundler", "nvm"}) {
+      const fs::path path = folder / ("model." + format);
+      try {
+        ExportModel(model, format, path, {});
+        FAIL() << "no error for " << format << " into " << folder;
+      } catch (const InputError& error) {
+        const std::string message = error.what();
+        EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+        EXPECT_NE(message.find(folder.string()), std::string::npos) << message;
+      }
+      EXPECT_FALSE(fs::exists(path)) << path;
+    }
+  }
 }
 
 }  // namespace

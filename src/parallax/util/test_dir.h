@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -35,5 +36,24 @@ class ScopedTestDir {
  private:
   std::filesystem::path path_;
 };
+
+// An existing folder this process cannot create anything in: a read-only folder in `dir`
+// (chmod 0555), or for root, whom permissions do not stop, a sysfs folder (read-only for
+// everyone). Nothing when there is none.
+inline std::optional<std::filesystem::path> UnwritableFolder(const ScopedTestDir& dir) {
+  namespace fs = std::filesystem;
+  if (geteuid() == 0) {
+    const fs::path sys = "/sys/kernel";
+    std::error_code error;
+    if (!fs::is_directory(sys) || fs::create_directory(sys / "parallax_probe", error)) {
+      return std::nullopt;
+    }
+    return sys;
+  }
+  const fs::path folder = dir.path() / "read_only";
+  fs::create_directories(folder);
+  fs::permissions(folder, fs::perms::owner_read | fs::perms::owner_exec);
+  return folder;
+}
 
 }  // namespace parallax::test
