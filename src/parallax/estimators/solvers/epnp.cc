@@ -71,6 +71,14 @@ constexpr int ProductIndex(int a, int b) { return b * (b + 1) / 2 + a; }
 // EPnP with `kNumControlPoints` control points: 4 in general, 3 for planar scenes (whose
 // barycentric coordinates then ignore the out-of-plane offset). `axes` are the principal axes
 // of the centred world points (columns, by decreasing spread) and `sigmas` their spreads.
+// Least-squares solution of A x = b by column-pivoting QR. The small systems below go through
+// dynamic-size matrices on purpose: a fixed-size QR instantiated for each of their shapes (and
+// a fixed-size eigensolver per control-point count) made this file take two minutes to
+// compile, for no measurable gain in a solver that runs once per LO-RANSAC refinement.
+Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
+  return A.colPivHouseholderQr().solve(b);
+}
+
 template <int kNumControlPoints>
 bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
                             const std::vector<Vector3d>& points3D, const Vector3d& centroid,
@@ -107,7 +115,7 @@ bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
     MtM.noalias() += row_u * row_u.transpose() + row_v * row_v.transpose();
   }
 
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kDim, kDim>> eigen(MtM);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(MtM);
   if (eigen.info() != Eigen::Success) return false;
   // Null-space basis: the eigenvectors of the smallest eigenvalues (ascending order).
   const Eigen::Matrix<double, kDim, kNumBetas> kernel =
@@ -144,7 +152,7 @@ bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
     constexpr int kNumColumns = std::tuple_size_v<std::decay_t<decltype(columns)>>;
     Eigen::Matrix<double, kNumPairs, kNumColumns> L_sub;
     for (int c = 0; c < kNumColumns; ++c) L_sub.col(c) = L.col(columns[c]);
-    return Eigen::Matrix<double, kNumColumns, 1>(L_sub.colPivHouseholderQr().solve(rho));
+    return Eigen::Matrix<double, kNumColumns, 1>(SolveLeastSquares(L_sub, rho));
   };
   {
     // N = 1: |beta| |dv| = |dc| in the least-squares sense.
@@ -209,7 +217,7 @@ bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
           jacobian.col(b) += L.col(ProductIndex(a, b)) * betas(a);
         }
       }
-      const Betas step = jacobian.colPivHouseholderQr().solve(-residuals);
+      const Betas step = SolveLeastSquares(jacobian, -residuals);
       if (!step.allFinite()) break;
       const Betas updated = betas + step;
       const Eigen::Matrix<double, kNumPairs, 1> updated_residuals = distance_residuals(updated);
