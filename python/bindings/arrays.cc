@@ -64,12 +64,12 @@ py::object FromJson(const nlohmann::json& json) {
     case nlohmann::json::value_t::object: {
       py::dict dict;
       for (const auto& [key, value] : json.items()) dict[py::str(key)] = FromJson(value);
-      return std::move(dict);
+      return dict;
     }
     case nlohmann::json::value_t::array: {
       py::list list;
       for (const nlohmann::json& value : json) list.append(FromJson(value));
-      return std::move(list);
+      return list;
     }
     case nlohmann::json::value_t::string:
       return py::str(json.get<std::string>());

@@ -95,7 +95,9 @@ class ResumeTest : public ::testing::Test {
       }
       const ProcessResult result = child.Wait(1);
       if (killed && still_in_stage(out, result.err)) {
-        if (signal == SIGKILL) EXPECT_EQ(result.signal, SIGKILL);
+        if (signal == SIGKILL) {
+          EXPECT_EQ(result.signal, SIGKILL);
+        }
         if (signalled_result != nullptr) *signalled_result = result;
         return out;
       }

@@ -126,7 +126,9 @@ TEST(Reconstruction, PointLookupsByIdSurviveEditsAndCopies) {
   for (size_t i = 0; i < many_ids.size(); i += 3) many.DeletePoint3D(many_ids[i]);
   for (size_t i = 0; i < many_ids.size(); ++i) {
     ASSERT_EQ(many.ExistsPoint3D(many_ids[i]), i % 3 != 0) << i;
-    if (i % 3 != 0) EXPECT_EQ(many.GetPoint3D(many_ids[i]).xyz.x(), 4.0 + 2 * i);
+    if (i % 3 != 0) {
+      EXPECT_EQ(many.GetPoint3D(many_ids[i]).xyz.x(), 4.0 + 2 * i);
+    }
   }
 }
 
