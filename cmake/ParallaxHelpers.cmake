@@ -27,6 +27,7 @@ function(parallax_add_library)
   add_library(${target} STATIC ${sources})
   target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR}/src)
   target_link_libraries(${target} PUBLIC ${ARG_DEPS})
+  parallax_use_precompiled_headers(${target} library)
 endfunction()
 
 function(parallax_add_tests)
@@ -40,6 +41,7 @@ function(parallax_add_tests)
     set(target ${ARG_NAME}_${test_name})
     add_executable(${target} ${test_source})
     target_link_libraries(${target} PRIVATE ${ARG_DEPS} parallax_test_main GTest::gtest GTest::gmock)
+    parallax_use_precompiled_headers(${target} test)
     gtest_discover_tests(${target}
       DISCOVERY_TIMEOUT 60
       PROPERTIES ENVIRONMENT "PARALLAX_BINARY=${PROJECT_BINARY_DIR}/parallax")
