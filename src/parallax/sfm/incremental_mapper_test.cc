@@ -90,61 +90,64 @@ const Sim3d kSeedFromTruth(
     2.5, Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
     Eigen::Vector3d(4, -1, 2));
 
-TEST(IncrementalMapper, ExtendsASeedOfKnownPosesToTheWholeScene) {
-  const SyntheticDatasetOptions options = NoisyRingOptions();
-  Reconstruction truth;
-  SynthesizeDataset(options, &truth);
-  const MapperInput input = InputFromTruth(truth);
-  const Reconstruction seed = SeedOfFirstImages(truth, 6, kSeedFromTruth);
+// The noisy ring mapped by extending a seed of its first images.
+class ExtendTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    SynthesizeDataset(options_, &truth_);
+    input_ = InputFromTruth(truth_);
+  }
+  std::vector<Reconstruction> Extend(image_t num_seed_images) {
+    seed_ = SeedOfFirstImages(truth_, num_seed_images, kSeedFromTruth);
+    IncrementalMapper mapper(IncrementalMapperOptions(), input_);
+    return mapper.Extend(seed_, &summary_);
+  }
+  const SyntheticDatasetOptions options_ = NoisyRingOptions();
+  Reconstruction truth_;
+  MapperInput input_;
+  Reconstruction seed_;
+  MapperSummary summary_;
+};
 
-  MapperSummary summary;
-  IncrementalMapper mapper(IncrementalMapperOptions(), input);
-  const std::vector<Reconstruction> models = mapper.Extend(seed, &summary);
+TEST_F(ExtendTest, SeedOfKnownPosesGrowsToTheWholeScene) {
+  const std::vector<Reconstruction> models = Extend(6);
   ASSERT_EQ(models.size(), 1u);
-  EXPECT_EQ(models[0].NumRegImages(), truth.NumRegImages());
-  EXPECT_GE(models[0].NumPoints3D(), 0.9 * truth.NumPoints3D());
+  EXPECT_EQ(models[0].NumRegImages(), truth_.NumRegImages());
+  EXPECT_GE(models[0].NumPoints3D(), 0.9 * truth_.NumPoints3D());
   // The seed's frame is kept: its images stay close to where the seed put them.
   for (image_t image_id = 1; image_id <= 6; ++image_id) {
     EXPECT_LT((models[0].GetImage(image_id).ProjectionCenter() -
-               seed.GetImage(image_id).ProjectionCenter())
+               seed_.GetImage(image_id).ProjectionCenter())
                   .norm(),
-              1e-2 * kSeedFromTruth.scale * options.camera_distance)
+              1e-2 * kSeedFromTruth.scale * options_.camera_distance)
         << image_id;
   }
-  const PoseErrors errors = CompareToTruth(models[0], truth);
+  const PoseErrors errors = CompareToTruth(models[0], truth_);
   EXPECT_LT(errors.max_rotation_deg, 0.05);
-  EXPECT_LT(errors.max_center_error, 1e-3 * options.camera_distance);
+  EXPECT_LT(errors.max_center_error, 1e-3 * options_.camera_distance);
   // Ten new images outnumber the seed's six: global adjustments as the model grows, and the
   // final one's refinement rounds, as in a run from scratch.
-  EXPECT_GE(summary.num_global_ba, 2u);
+  EXPECT_GE(summary_.num_global_ba, 2u);
 }
 
 // A few photos added to a finished model: each is settled by a local adjustment, then one
 // global round, and the model is as accurate as one mapped from scratch.
-TEST(IncrementalMapper, FewImagesAddedToASeedGetLocalThenOneGlobalAdjustment) {
-  const SyntheticDatasetOptions options = NoisyRingOptions();
-  Reconstruction truth;
-  SynthesizeDataset(options, &truth);
-  const MapperInput input = InputFromTruth(truth);
-  const Reconstruction seed = SeedOfFirstImages(truth, 12, kSeedFromTruth);
-
-  MapperSummary summary;
-  IncrementalMapper mapper(IncrementalMapperOptions(), input);
-  const std::vector<Reconstruction> models = mapper.Extend(seed, &summary);
+TEST_F(ExtendTest, FewImagesAddedGetLocalThenOneGlobalAdjustment) {
+  const std::vector<Reconstruction> models = Extend(12);
   ASSERT_EQ(models.size(), 1u);
-  EXPECT_EQ(models[0].NumRegImages(), truth.NumRegImages());
-  EXPECT_EQ(summary.num_local_ba, 4u);
-  EXPECT_EQ(summary.num_global_ba, 1u);
+  EXPECT_EQ(models[0].NumRegImages(), truth_.NumRegImages());
+  EXPECT_EQ(summary_.num_local_ba, 4u);
+  EXPECT_EQ(summary_.num_global_ba, 1u);
 
   MapperSummary scratch_summary;
-  IncrementalMapper scratch_mapper(IncrementalMapperOptions(), input);
+  IncrementalMapper scratch_mapper(IncrementalMapperOptions(), input_);
   const std::vector<Reconstruction> scratch = scratch_mapper.Reconstruct(&scratch_summary);
   ASSERT_EQ(scratch.size(), 1u);
-  const PoseErrors errors = CompareToTruth(models[0], truth);
-  const PoseErrors scratch_errors = CompareToTruth(scratch[0], truth);
+  const PoseErrors errors = CompareToTruth(models[0], truth_);
+  const PoseErrors scratch_errors = CompareToTruth(scratch[0], truth_);
   EXPECT_LT(errors.max_rotation_deg, std::max(0.05, 1.1 * scratch_errors.max_rotation_deg));
   EXPECT_LT(errors.max_center_error,
-            std::max(1e-3 * options.camera_distance, 1.1 * scratch_errors.max_center_error));
+            std::max(1e-3 * options_.camera_distance, 1.1 * scratch_errors.max_center_error));
 }
 
 TEST(IncrementalMapper, UnrelatedImagesGiveNoModelAndReasons) {
