@@ -68,9 +68,6 @@ bool AlignRigid(const std::vector<Vector3d>& points_in_world,
 // order [b11 b12 b22 b13 b23 b33 b14 b24 b34 b44].
 constexpr int ProductIndex(int a, int b) { return b * (b + 1) / 2 + a; }
 
-// EPnP with `kNumControlPoints` control points: 4 in general, 3 for planar scenes (whose
-// barycentric coordinates then ignore the out-of-plane offset). `axes` are the principal axes
-// of the centred world points (columns, by decreasing spread) and `sigmas` their spreads.
 // Least-squares solution of A x = b by column-pivoting QR. The small systems below go through
 // dynamic-size matrices on purpose: a fixed-size QR instantiated for each of their shapes (and
 // a fixed-size eigensolver per control-point count) made this file take two minutes to
@@ -79,6 +76,9 @@ Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& A, const Eigen::VectorX
   return A.colPivHouseholderQr().solve(b);
 }
 
+// EPnP with `kNumControlPoints` control points: 4 in general, 3 for planar scenes (whose
+// barycentric coordinates then ignore the out-of-plane offset). `axes` are the principal axes
+// of the centred world points (columns, by decreasing spread) and `sigmas` their spreads.
 template <int kNumControlPoints>
 bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
                             const std::vector<Vector3d>& points3D, const Vector3d& centroid,
