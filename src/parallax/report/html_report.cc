@@ -1,6 +1,5 @@
 #include "parallax/report/html_report.h"
 
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -9,6 +8,7 @@
 #include <unordered_map>
 
 #include "parallax/image/image_codecs.h"
+#include "parallax/math/dense_decompositions.h"
 #include "parallax/report/html_report_assets.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -426,12 +426,13 @@ json ReportBuilder::SceneJson() const {
     for (const auto& c : centers) mean += c;
     mean /= centers.size();
     for (size_t i = 0; i < centers.size(); ++i) centered.row(i) = (centers[i] - mean).transpose();
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centered, Eigen::ComputeThinV);
-    const Eigen::Vector3d s = svd.singularValues();
+    Eigen::VectorXd s;
+    Eigen::MatrixXd V;
+    RightSingularSystem(centered, &s, &V);
     const bool ring = s[1] > 0.3 * s[0] && s[2] < 0.3 * s[1];
     if (ring && up.norm() < 0.7) {
       // Cameras around an object usually look slightly down at it; else side with the images.
-      Eigen::Vector3d normal = svd.matrixV().col(2);
+      Eigen::Vector3d normal = V.col(2);
       const double look = forward.dot(normal);
       if (std::abs(look) > 0.05 ? look > 0 : normal.dot(up) < 0) normal = -normal;
       up = normal;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "parallax/math/dense_decompositions.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
@@ -53,17 +54,18 @@ void SolveDLTResection(const std::vector<Eigen::Vector2d>& points2D,
   const double scale3D = std::sqrt(3.0) * num_points / distance3D;
 
   // Rows [X^T 0 -u X^T] and [0 X^T -v X^T] for P stacked row by row.
-  Eigen::Matrix<double, Eigen::Dynamic, 12> A(2 * num_points, 12);
+  Eigen::MatrixXd A(2 * num_points, 12);
   for (size_t i = 0; i < num_points; ++i) {
     const Eigen::Vector4d X = (scale3D * (points3D[i] - mean3D)).homogeneous();
     const Eigen::Vector2d x = scale2D * (points2D[i] - mean2D);
     A.row(2 * i) << X.transpose(), Eigen::RowVector4d::Zero(), -x.x() * X.transpose();
     A.row(2 * i + 1) << Eigen::RowVector4d::Zero(), X.transpose(), -x.y() * X.transpose();
   }
-  const Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 12>> svd(A, Eigen::ComputeFullV);
-  const auto& singular_values = svd.singularValues();
+  Eigen::VectorXd singular_values;
+  Eigen::MatrixXd V;
+  RightSingularSystem(A, &singular_values, &V);
   if (!(singular_values(10) > kMinSingularValueRatio * singular_values(0))) return;
-  const Eigen::Matrix<double, 12, 1> p = svd.matrixV().col(11);
+  const Eigen::Matrix<double, 12, 1> p = V.col(11);
   Matrix3x4d normalized_proj;
   normalized_proj << p.segment<4>(0).transpose(), p.segment<4>(4).transpose(),
       p.segment<4>(8).transpose();

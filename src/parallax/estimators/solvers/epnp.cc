@@ -3,7 +3,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <array>
 #include <cmath>
@@ -11,6 +10,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "parallax/math/dense_decompositions.h"
 #include "parallax/math/eigen_types.h"
 #include "parallax/util/check.h"
 
@@ -68,14 +68,6 @@ bool AlignRigid(const std::vector<Vector3d>& points_in_world,
 // order [b11 b12 b22 b13 b23 b33 b14 b24 b34 b44].
 constexpr int ProductIndex(int a, int b) { return b * (b + 1) / 2 + a; }
 
-// Least-squares solution of A x = b by column-pivoting QR. The small systems below go through
-// dynamic-size matrices on purpose: a fixed-size QR instantiated for each of their shapes (and
-// a fixed-size eigensolver per control-point count) made this file take two minutes to
-// compile, for no measurable gain in a solver that runs once per LO-RANSAC refinement.
-Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
-  return A.colPivHouseholderQr().solve(b);
-}
-
 // EPnP with `kNumControlPoints` control points: 4 in general, 3 for planar scenes (whose
 // barycentric coordinates then ignore the out-of-plane offset). `axes` are the principal axes
 // of the centred world points (columns, by decreasing spread) and `sigmas` their spreads.
@@ -115,11 +107,15 @@ bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
     MtM.noalias() += row_u * row_u.transpose() + row_v * row_v.transpose();
   }
 
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(MtM);
-  if (eigen.info() != Eigen::Success) return false;
+  // The small systems here go through dynamic-size decompositions (dense_decompositions.h) on
+  // purpose: a fixed-size QR per shape and an eigensolver per control-point count made this
+  // file take two minutes to compile, for no measurable gain in a solver that runs once per
+  // LO-RANSAC refinement.
+  Eigen::VectorXd eigenvalues;
+  Eigen::MatrixXd eigenvectors;
+  if (!SymmetricEigenSystem(MtM, &eigenvalues, &eigenvectors)) return false;
   // Null-space basis: the eigenvectors of the smallest eigenvalues (ascending order).
-  const Eigen::Matrix<double, kDim, kNumBetas> kernel =
-      eigen.eigenvectors().template leftCols<kNumBetas>();
+  const Eigen::Matrix<double, kDim, kNumBetas> kernel = eigenvectors.template leftCols<kNumBetas>();
 
   // Distance constraints |c^cam_p - c^cam_q|^2 = |c^world_p - c^world_q|^2 as L b = rho, b the
   // vector of beta products.

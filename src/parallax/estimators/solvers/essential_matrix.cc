@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "parallax/estimators/solvers/fundamental_matrix.h"
+#include "parallax/math/dense_decompositions.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
@@ -91,16 +92,17 @@ bool EssentialNullSpace(const std::vector<Eigen::Vector2d>& points1,
     *null_space = Q.rightCols<4>();
     return true;
   }
-  Eigen::Matrix<double, Eigen::Dynamic, 9> A = Eigen::Matrix<double, Eigen::Dynamic, 9>::Zero(
-      std::max<Eigen::Index>(static_cast<Eigen::Index>(num_points), 9), 9);
+  Eigen::MatrixXd A =
+      Eigen::MatrixXd::Zero(std::max<Eigen::Index>(static_cast<Eigen::Index>(num_points), 9), 9);
   for (size_t i = 0; i < num_points; ++i) {
     A.row(static_cast<Eigen::Index>(i)) = EpipolarRow(points1[i], points2[i]).transpose();
   }
   if (!A.allFinite()) return false;
-  const Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 9>> svd(A, Eigen::ComputeFullV);
-  const auto& singular_values = svd.singularValues();
+  Eigen::VectorXd singular_values;
+  Eigen::MatrixXd V;
+  RightSingularSystem(A, &singular_values, &V);
   if (!(singular_values(4) > kMinRankRatio * singular_values(0))) return false;
-  *null_space = svd.matrixV().rightCols<4>();
+  *null_space = V.rightCols<4>();
   return true;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "parallax/estimators/solvers/null_space.h"
+#include "parallax/math/dense_decompositions.h"
 #include "parallax/math/polynomial.h"
 #include "parallax/util/check.h"
 
@@ -63,20 +64,19 @@ bool LeastSquaresNullSpace(const std::vector<Eigen::Vector2d>& points1,
       A.row(i) = EpipolarRow(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]))
                      .transpose();
     }
-    const Eigen::Matrix<double, 9, 9> normal = A.transpose() * A;
-    return NullSpaceFromNormalMatrix<kNumNull>(normal, null_space, kMinEigenvalueRatio);
+    return NullSpaceFromNormalMatrix<kNumNull>(NormalMatrix(A), null_space, kMinEigenvalueRatio);
   }
-  Eigen::Matrix<double, Eigen::Dynamic, 9> A =
-      Eigen::Matrix<double, Eigen::Dynamic, 9>::Zero(std::max<Eigen::Index>(num_points, 9), 9);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(std::max<Eigen::Index>(num_points, 9), 9);
   for (Eigen::Index i = 0; i < num_points; ++i) {
     A.row(i) = EpipolarRow(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]))
                    .transpose();
   }
-  const Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 9>> svd(A, Eigen::ComputeFullV);
-  const auto& singular_values = svd.singularValues();
+  Eigen::VectorXd singular_values;
+  Eigen::MatrixXd V;
+  RightSingularSystem(A, &singular_values, &V);
   constexpr int kRank = 9 - kNumNull;
   if (!(singular_values(kRank - 1) > kMinRankRatio * singular_values(0))) return false;
-  *null_space = svd.matrixV().template rightCols<kNumNull>();
+  *null_space = V.template rightCols<kNumNull>();
   return true;
 }
 

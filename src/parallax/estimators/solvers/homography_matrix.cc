@@ -6,6 +6,7 @@
 
 #include "parallax/estimators/solvers/fundamental_matrix.h"
 #include "parallax/estimators/solvers/null_space.h"
+#include "parallax/math/dense_decompositions.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
@@ -65,20 +66,19 @@ void EstimateHomographyMatrix(const std::vector<Eigen::Vector2d>& points1,
     if (!NullSpaceByElimination(A, &null_vector, kMinRankRatio)) return;
     h = null_vector;
   } else {
-    const Eigen::Index num_rows = static_cast<Eigen::Index>(2 * num_points);
-    Eigen::Matrix<double, Eigen::Dynamic, 9> A(num_rows, 9);
+    Eigen::Matrix<double, Eigen::Dynamic, 9> A(static_cast<Eigen::Index>(2 * num_points), 9);
     for (size_t i = 0; i < num_points; ++i) {
       AddHomographyRows(ApplyNormalization(T1, points1[i]), ApplyNormalization(T2, points2[i]),
                         A.middleRows<2>(static_cast<Eigen::Index>(2 * i)));
     }
     if (num_points >= kMinNumPointsForNormalEquations) {
-      const Eigen::Matrix<double, 9, 9> normal = A.transpose() * A;
-      if (!NullSpaceFromNormalMatrix<1>(normal, &h, kMinEigenvalueRatio)) return;
+      if (!NullSpaceFromNormalMatrix<1>(NormalMatrix(A), &h, kMinEigenvalueRatio)) return;
     } else {
-      const Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 9>> svd(A, Eigen::ComputeFullV);
-      const auto& singular_values = svd.singularValues();
+      Eigen::VectorXd singular_values;
+      Eigen::MatrixXd V;
+      RightSingularSystem(A, &singular_values, &V);
       if (!(singular_values(7) > kMinRankRatio * singular_values(0))) return;
-      h = svd.matrixV().col(8);
+      h = V.col(8);
     }
   }
 
