@@ -71,6 +71,16 @@ double* BlockSparseReducedMatrix::BlockValues(int row_offset, int col_offset) {
   return values_.data() + structure_->ValuesBegin()[index];
 }
 
+bool DenseReducedMatrix::Solve(const Eigen::VectorXd& b,
+                               const ConjugateGradientOptions& /*options*/, Eigen::VectorXd* x,
+                               int* num_iterations) const {
+  *num_iterations = 0;
+  const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(matrix_);
+  if (llt.info() != Eigen::Success) return false;
+  *x = llt.solve(b);
+  return true;
+}
+
 BlockSparseReducedMatrix& BlockSparseReducedMatrix::operator+=(
     const BlockSparseReducedMatrix& other) {
   PARALLAX_CHECK_EQ(values_.size(), other.values_.size());

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cstdint>
 #include <utility>
@@ -76,15 +75,10 @@ class DenseReducedMatrix {
   }
   double Diagonal(int d) const { return matrix_(d, d); }
   void AddToDiagonal(int d, double value) { matrix_(d, d) += value; }
-  // Cholesky of the lower triangle; false when S is not positive definite.
-  bool Solve(const Eigen::VectorXd& b, const ConjugateGradientOptions& /*options*/,
-             Eigen::VectorXd* x, int* num_iterations) const {
-    *num_iterations = 0;
-    const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(matrix_);
-    if (llt.info() != Eigen::Success) return false;
-    *x = llt.solve(b);
-    return true;
-  }
+  // Cholesky of the lower triangle; false when S is not positive definite. (Out of line: the
+  // header is included widely, and a Cholesky instantiated in each includer costs each one.)
+  bool Solve(const Eigen::VectorXd& b, const ConjugateGradientOptions& options, Eigen::VectorXd* x,
+             int* num_iterations) const;
 
  private:
   int n_ = 0;
