@@ -3,6 +3,9 @@
 #include <cstring>
 #include <iostream>
 #include <string>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "parallax/cli/commands.h"
 
@@ -47,12 +50,25 @@ void PrintUsage() {
   }
 }
 
+// Keeps freed buffers of up to tens of megabytes in the process. Every bundle adjustment
+// allocates its Jacobians and reduced system afresh (7 MB on templeRing's 44,000
+// observations) and frees them; glibc's default gives that memory back to the kernel, and
+// the next adjustment faults it in again page by page. `parallax mapper` on templeRing:
+// 29,000 page faults and 1.91 s with the default, 1.64 s with this (peak memory 50 -> 55 MB).
+void KeepFreedLargeBuffers() {
+#if defined(__GLIBC__)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's own upper bound for its adaptive threshold.
+  mallopt(M_TRIM_THRESHOLD, 128 << 20);
+#endif
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   // A write past a file-size limit (ulimit -f) then fails with EFBIG and a one-line error
   // naming the file, instead of SIGXFSZ ending the process with a core dump.
   std::signal(SIGXFSZ, SIG_IGN);
+  KeepFreedLargeBuffers();
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     PrintUsage();
