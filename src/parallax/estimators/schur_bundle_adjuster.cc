@@ -565,17 +565,28 @@ Eigen::Vector2d SchurSolver<ReducedMatrix>::CameraStepImage(
 }
 
 // Ceres' model cost change of the linearised, loss-corrected residuals: -(J d)^T (r + J d / 2).
+// By the linearisation's chunks, each on a thread as there: a serial pass would pull every
+// chunk's Jacobians into one core's cache, from which the other core must fetch its own back
+// when it next writes them (on this machine that made the linearisation 60 % slower on two
+// threads than on one).
 template <typename ReducedMatrix>
 double SchurSolver<ReducedMatrix>::ModelCostChange(
     const Eigen::VectorXd& camera_step, const std::vector<Eigen::Vector3d>& point_step) const {
+  std::vector<double> chunk_change(NumChunks(), 0.0);
+  ParallelFor(0, static_cast<size_t>(NumChunks()), num_threads_, [&](size_t chunk) {
+    double change = 0;
+    for (size_t k = point_begin_[chunk_begin_[chunk]]; k < point_begin_[chunk_begin_[chunk + 1]];
+         ++k) {
+      const auto& observation = problem_.observations[observation_order_[k]];
+      const ObservationJacobian& jacobian = jacobians_[k];
+      const Eigen::Vector2d j_step =
+          jacobian.point * point_step[observation.point] + CameraStepImage(k, camera_step);
+      change -= j_step.dot(jacobian.residual + 0.5 * j_step);
+    }
+    chunk_change[chunk] = change;
+  });
   double change = 0;
-  for (size_t k = 0; k < observation_order_.size(); ++k) {
-    const auto& observation = problem_.observations[observation_order_[k]];
-    const ObservationJacobian& jacobian = jacobians_[k];
-    const Eigen::Vector2d j_step =
-        jacobian.point * point_step[observation.point] + CameraStepImage(k, camera_step);
-    change -= j_step.dot(jacobian.residual + 0.5 * j_step);
-  }
+  for (const double value : chunk_change) change += value;
   return change;
 }
 
