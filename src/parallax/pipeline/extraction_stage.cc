@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <set>
 
+#include "parallax/pipeline/feature_shards.h"
 #include "parallax/util/check.h"
 #include "parallax/util/content_hash.h"
 #include "parallax/util/interrupt.h"
@@ -96,9 +97,20 @@ bool StoredFeaturesAreCurrent(image_t image_id, const std::filesystem::path& pat
   return true;
 }
 
-ExtractionResult ExtractImage(const ExtractionJob& job, const ExtractionStageOptions& options) {
+ExtractionResult ExtractImage(const ExtractionJob& job, const ExtractionStageOptions& options,
+                              const FeatureShardIndex* shards) {
   ExtractionResult result;
   try {
+    if (std::optional<ShardImageFeatures> stored = shards ? shards->Find(job.path) : std::nullopt) {
+      // Extracted by another rank of a distributed run: stored here as if extracted here.
+      result.fingerprint = std::move(stored->fingerprint);
+      result.width = stored->width;
+      result.height = stored->height;
+      result.keypoints = std::move(stored->keypoints);
+      result.descriptors = std::move(stored->descriptors);
+      result.exif = ReadExifHint(job.path);
+      return result;
+    }
     result.fingerprint = FingerprintImageFile(job.path, &result.hash_seconds);
     const Bitmap bitmap = ReadBitmap(job.path, options.reader);
     result.width = static_cast<size_t>(bitmap.Width());
@@ -123,6 +135,31 @@ void ExtractionStageOptions::Check() const {
   sift.Check();
   reader.Check();
   camera.Check();
+  PARALLAX_CHECK_MSG(only_images.empty() || !forget_missing_images,
+                     "a share of the images must not forget the others");
+}
+
+std::vector<std::filesystem::path> ImagesToExtract(const ExtractionStageOptions& options,
+                                                   const std::filesystem::path& image_dir,
+                                                   Database* database) {
+  PARALLAX_CHECK(database != nullptr);
+  const std::optional<FeatureShardIndex> shards =
+      options.feature_shards.empty()
+          ? std::nullopt
+          : std::make_optional<FeatureShardIndex>(options.feature_shards);
+  ExtractionStageResult unused;
+  std::vector<std::filesystem::path> to_extract;
+  for (const std::filesystem::path& path : ListImageFiles(image_dir)) {
+    const std::optional<image_t> image_id = database->ImageIdByName(path.filename().string());
+    if (image_id && database->ExistsKeypoints(*image_id) &&
+        database->ExistsDescriptors(*image_id) &&
+        StoredFeaturesAreCurrent(*image_id, path, database, &unused)) {
+      continue;
+    }
+    if (shards && shards->Find(path)) continue;
+    to_extract.push_back(path);
+  }
+  return to_extract;
 }
 
 ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
@@ -142,7 +179,16 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
   ExtractionStageResult stats;
 
   std::vector<RejectedImageFile> rejected;
-  const std::vector<std::filesystem::path> paths = ListImageFiles(image_dir, &rejected);
+  std::vector<std::filesystem::path> paths = ListImageFiles(image_dir, &rejected);
+  if (!options.only_images.empty()) {
+    const std::set<std::string> share(options.only_images.begin(), options.only_images.end());
+    std::erase_if(paths, [&share](const std::filesystem::path& path) {
+      return share.count(path.filename().string()) == 0;
+    });
+    std::erase_if(rejected, [&share](const RejectedImageFile& file) {
+      return share.count(file.path.filename().string()) == 0;
+    });
+  }
   stats.num_images_found = paths.size();
   // Named like images but not images: the user probably expects them used, so say why not.
   for (const RejectedImageFile& file : rejected) {
@@ -244,6 +290,10 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
   // Images are extracted in parallel, so OpenCV's own threads inside SIFT only compete with
   // ours, and its pool busy-waits after each call, which slowed the mapping stage that
   // follows by ~10 % on templeRing. One OpenCV thread while there is an image per worker.
+  const std::optional<FeatureShardIndex> shards =
+      options.feature_shards.empty()
+          ? std::nullopt
+          : std::make_optional<FeatureShardIndex>(options.feature_shards);
   {
     const OpenCvThreadsGuard opencv_threads(
         /*single=*/jobs.size() >= static_cast<size_t>(EffectiveNumThreads(options.num_threads)));
@@ -251,7 +301,8 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
       // After a signal no new image starts; those finished are written in order up to the
       // first that did not run.
       if (PendingInterruptSignal() != 0) return;
-      auto result = std::make_unique<ExtractionResult>(ExtractImage(jobs[index], options));
+      auto result = std::make_unique<ExtractionResult>(
+          ExtractImage(jobs[index], options, shards ? &*shards : nullptr));
       std::lock_guard<std::mutex> lock(mutex);
       results[index] = std::move(result);
       while (next_to_write < jobs.size() && results[next_to_write] != nullptr) {

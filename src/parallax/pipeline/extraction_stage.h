@@ -24,6 +24,13 @@ struct ExtractionStageOptions {
   // are deleted from it with everything computed from them, so that no later stage uses
   // them. Off: they stay (a database shared by several folders).
   bool forget_missing_images = true;
+  // Distributed runs (distributed/). A rank extracts only the images of these file names (its
+  // share) into its shard database; empty: every image of the folder.
+  std::vector<std::string> only_images;
+  // The coordinator merges the shards: it takes the features of an image from these shard
+  // databases when one holds them for the file as it is now (FeatureShardIndex) instead of
+  // extracting them, and stores them exactly as it would its own.
+  std::vector<std::filesystem::path> feature_shards;
   void Check() const;
 };
 
@@ -61,5 +68,12 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
 ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
                                          const std::filesystem::path& image_dir,
                                          Database* database);
+
+// The image files of `image_dir` whose features neither `database` nor one of
+// options.feature_shards holds for the file as it is now: what a run still has to extract.
+// Name order. Brings stored fingerprints up to date as the stage does (a `touch`ed file).
+std::vector<std::filesystem::path> ImagesToExtract(const ExtractionStageOptions& options,
+                                                   const std::filesystem::path& image_dir,
+                                                   Database* database);
 
 }  // namespace parallax

@@ -139,16 +139,7 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
                        << cluster.image_names.size() << " images, " << cluster.pairs.size()
                        << " pairs";
   }
-  for (const auto& [image_id, image] : input.images) {
-    result.image_names[image_id] = image.name;
-    result.num_keypoints[image_id] = image.points2D.size();
-  }
-  const auto& track_stats = input.correspondence_graph.Stats();
-  PARALLAX_LOG(Info) << "mapper: " << input.images.size() << " images, "
-                     << input.two_view_geometries.size() << " verified pairs, "
-                     << track_stats.num_tracks << " tracks (mean length "
-                     << track_stats.mean_track_length << ", " << track_stats.num_split_components
-                     << " inconsistent components split)";
+  DescribeMapperInput(input, &result);
   result.load_seconds = timer.ElapsedSeconds();
 
   if (options.mapper_type == MapperType::kHierarchical) {
@@ -176,13 +167,31 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
     IncrementalMapper mapper(options.mapper, input);
     result.models = mapper.Reconstruct(&result.summary);
   }
-  if (result.models.empty()) return result;
-
-  timer.Restart();
-  for (Reconstruction& model : result.models) ColorizePoints(image_dir, &model);
-  WriteModels(result.models, output_dir, options.write_text, options.write_binary);
-  result.write_seconds = timer.ElapsedSeconds();
+  ColorizeAndWriteModels(options, image_dir, output_dir, &result);
   return result;
+}
+
+void ColorizeAndWriteModels(const MappingStageOptions& options,
+                            const std::filesystem::path& image_dir,
+                            const std::filesystem::path& output_dir, MappingStageResult* result) {
+  if (result->models.empty()) return;
+  const Timer timer;
+  for (Reconstruction& model : result->models) ColorizePoints(image_dir, &model);
+  WriteModels(result->models, output_dir, options.write_text, options.write_binary);
+  result->write_seconds = timer.ElapsedSeconds();
+}
+
+void DescribeMapperInput(const MapperInput& input, MappingStageResult* result) {
+  for (const auto& [image_id, image] : input.images) {
+    result->image_names[image_id] = image.name;
+    result->num_keypoints[image_id] = image.points2D.size();
+  }
+  const auto& track_stats = input.correspondence_graph.Stats();
+  PARALLAX_LOG(Info) << "mapper: " << input.images.size() << " images, "
+                     << input.two_view_geometries.size() << " verified pairs, "
+                     << track_stats.num_tracks << " tracks (mean length "
+                     << track_stats.mean_track_length << ", " << track_stats.num_split_components
+                     << " inconsistent components split)";
 }
 
 }  // namespace parallax

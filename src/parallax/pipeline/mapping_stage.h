@@ -58,6 +58,14 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
                                    const std::filesystem::path& image_dir,
                                    const std::filesystem::path& output_dir);
 
+// The stage's last step: colours the models' points from `image_dir` and writes them (nothing
+// when there is no model), timed in result->write_seconds.
+void ColorizeAndWriteModels(const MappingStageOptions& options,
+                            const std::filesystem::path& image_dir,
+                            const std::filesystem::path& output_dir, MappingStageResult* result);
+// Names and keypoint counts of the input's images, and the log line that describes it.
+void DescribeMapperInput(const MapperInput& input, MappingStageResult* result);
+
 // Writes each cluster (ids of `input`) as DIR/cluster-<k>.txt, replacing what DIR held.
 void WriteClusterFiles(const MapperInput& input, const std::vector<std::vector<image_t>>& clusters,
                        const std::filesystem::path& dir);

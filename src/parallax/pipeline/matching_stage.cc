@@ -35,9 +35,9 @@ struct PairJob {
   bool done = false;  // False when a signal stopped the batch before this pair ran.
 };
 
-bool IsVerified(const TwoViewGeometry& geometry) {
-  return geometry.config != TwoViewGeometry::kUndefined &&
-         geometry.config != TwoViewGeometry::kDegenerate && !geometry.inlier_matches.empty();
+bool IsVerified(const PairMatchStats& pair) {
+  return pair.config != TwoViewGeometry::kUndefined &&
+         pair.config != TwoViewGeometry::kDegenerate && pair.num_inliers > 0;
 }
 
 // The pairs without a two-view geometry in `database`; counts the others in `*num_stored`.
@@ -89,11 +89,14 @@ void MatchingStageOptions::Check() const {
   PARALLAX_CHECK_GT(batch_size, 0);
 }
 
-MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Database* database) {
+MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Database* database,
+                                     PairSharing* sharing) {
   options.Check();
   PARALLAX_CHECK(database != nullptr);
   const Timer timer;
   MatchingStageResult stats;
+  const bool coordinator = sharing == nullptr || sharing->IsCoordinator();
+  Database* const store = sharing != nullptr ? sharing->Store() : database;
 
   std::vector<Image> images = database->ReadAllImages();
   std::sort(images.begin(), images.end(),
@@ -119,22 +122,28 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
     }
   }
 
-  PairSelection selection = SelectPairs(options.pairs, image_ids, *database);
-  const std::vector<std::pair<image_t, image_t>> all_pairs = std::move(selection.pairs);
-  selection.pairs.clear();
-  stats.selection = selection;
+  // What the ranks of an interrupted distributed run stored goes into the database first, so
+  // that no pair is matched again.
+  if (sharing != nullptr) sharing->Merge(database);
   stats.preemptive = options.preemptive.enabled;
-  stats.num_pairs = all_pairs.size();
-  const std::vector<std::pair<image_t, image_t>> pairs =
-      PairsNotStored(all_pairs, *database, &stats.num_skipped);
-  std::string mode_names;
-  for (const PairMode mode : selection.modes)
-    mode_names += (mode_names.empty() ? "" : " + ") + PairModeName(mode);
-  PARALLAX_LOG(Info) << "Matching: " << image_ids.size() << " images, " << all_pairs.size() << " "
-                     << mode_names << " pairs (" << selection.reason << "; chosen in "
-                     << selection.seconds << " s), " << stats.num_skipped << " already verified, "
-                     << pairs.size() << " to match"
-                     << (stats.preemptive ? ", preemptive test on" : "");
+  std::vector<std::pair<image_t, image_t>> pairs;
+  if (coordinator) {
+    PairSelection selection = SelectPairs(options.pairs, image_ids, *database);
+    const std::vector<std::pair<image_t, image_t>> all_pairs = std::move(selection.pairs);
+    selection.pairs.clear();
+    stats.selection = selection;
+    stats.num_pairs = all_pairs.size();
+    pairs = PairsNotStored(all_pairs, *database, &stats.num_skipped);
+    std::string mode_names;
+    for (const PairMode mode : selection.modes)
+      mode_names += (mode_names.empty() ? "" : " + ") + PairModeName(mode);
+    PARALLAX_LOG(Info) << "Matching: " << image_ids.size() << " images, " << all_pairs.size() << " "
+                       << mode_names << " pairs (" << selection.reason << "; chosen in "
+                       << selection.seconds << " s), " << stats.num_skipped << " already verified, "
+                       << pairs.size() << " to match"
+                       << (stats.preemptive ? ", preemptive test on" : "");
+  }
+  if (sharing != nullptr) sharing->Share(&pairs);
 
   // Each pair runs on one thread; the parallelism is over pairs.
   FeatureMatchingOptions matching_options = options.matching;
@@ -144,9 +153,13 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
     preemptive_matching_options.max_ratio = options.preemptive.max_ratio;
   const size_t cache_capacity = 2 * static_cast<size_t>(options.pairs.block_size);
   std::unordered_map<image_t, ImageFeatures> cache;
-  // Matches, verifies and stores `pairs` in batches (one transaction each).
-  const auto match_pairs = [&](const std::vector<std::pair<image_t, image_t>>& pairs,
+  // Matches, verifies and stores `all_pairs` (this rank's share of them) in batches, one
+  // transaction each.
+  const auto match_pairs = [&](const std::vector<std::pair<image_t, image_t>>& all_pairs,
                                const char* label) {
+    const std::vector<std::pair<image_t, image_t>> pairs =
+        sharing != nullptr ? sharing->ShareOf(all_pairs) : all_pairs;
+    std::vector<PairMatchStats> processed;
     ProgressReporter progress(label, pairs.size());
 
     for (size_t batch_start = 0; batch_start < pairs.size(); batch_start += options.batch_size) {
@@ -201,8 +214,8 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
         PairJob& job = jobs[k];
         job.image_id1 = pairs[batch_start + k].first;
         job.image_id2 = pairs[batch_start + k].second;
-        job.has_matches = database->ExistsMatches(job.image_id1, job.image_id2);
-        if (job.has_matches) job.matches = database->ReadMatches(job.image_id1, job.image_id2);
+        job.has_matches = store->ExistsMatches(job.image_id1, job.image_id2);
+        if (job.has_matches) job.matches = store->ReadMatches(job.image_id1, job.image_id2);
       }
 
       ParallelFor(0, jobs.size(), options.num_threads, [&](size_t k) {
@@ -243,13 +256,13 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
         progress.Increment();
       });
 
-      database->BeginTransaction();
+      store->BeginTransaction();
       for (const PairJob& job : jobs) {
         if (!job.done) continue;
-        if (!job.has_matches) database->WriteMatches(job.image_id1, job.image_id2, job.matches);
-        database->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
+        if (!job.has_matches) store->WriteMatches(job.image_id1, job.image_id2, job.matches);
+        store->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
       }
-      database->EndTransaction();
+      store->EndTransaction();
 
       for (const PairJob& job : jobs) {
         if (!job.done) continue;
@@ -261,43 +274,54 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
         pair_stats.config = job.geometry.config;
         pair_stats.num_preemptive_matches = job.num_preemptive_matches;
         pair_stats.preemptive_rejected = job.preemptive_rejected;
-        stats.pairs.push_back(pair_stats);
-        ++stats.num_matched;
-        if (job.preemptive_rejected) ++stats.num_preemptive_rejected;
+        processed.push_back(pair_stats);
         stats.matching_thread_seconds += job.matching_seconds;
         stats.verification_thread_seconds += job.verification_seconds;
-        if (IsVerified(job.geometry)) ++stats.num_verified;
       }
-      ThrowIfInterrupted(std::to_string(stats.num_skipped + stats.num_matched) + " of " +
-                         std::to_string(stats.num_pairs) + " pairs are matched and verified in " +
-                         database->Path().string());
+      ThrowIfInterrupted(std::to_string(processed.size()) + " of " + std::to_string(pairs.size()) +
+                         " pairs are matched and verified in " + store->Path().string());
     }
     progress.Finish();
+    if (sharing != nullptr) processed = sharing->Merge(database);
+    for (const PairMatchStats& pair_stats : processed) {
+      ++stats.num_matched;
+      if (pair_stats.preemptive_rejected) ++stats.num_preemptive_rejected;
+      if (IsVerified(pair_stats)) ++stats.num_verified;
+      stats.pairs.push_back(pair_stats);
+    }
   };
   match_pairs(pairs, "matching");
 
   // Pairs that close loops: images that verified pairs tie together but retrieval missed.
-  const bool retrieval = std::find(selection.modes.begin(), selection.modes.end(),
-                                   PairMode::kRetrieval) != selection.modes.end();
-  for (int round = 0; retrieval && options.pairs.retrieval.num_loop_neighbors > 0 &&
+  // The coordinator chooses them; the other ranks learn from an empty list that it is over.
+  const bool retrieval = std::find(stats.selection.modes.begin(), stats.selection.modes.end(),
+                                   PairMode::kRetrieval) != stats.selection.modes.end();
+  for (int round = 0; options.pairs.retrieval.num_loop_neighbors > 0 &&
                       round < options.pairs.retrieval.num_loop_rounds;
        ++round) {
-    std::vector<std::pair<image_pair_t, int>> verified;
-    for (const auto& [pair_id, num_inliers] : database->ReadTwoViewGeometryNumInliers()) {
-      if (num_inliers >= options.geometry.min_num_inliers)
-        verified.emplace_back(pair_id, num_inliers);
+    std::vector<std::pair<image_t, image_t>> loop_pairs;
+    if (coordinator && retrieval) {
+      std::vector<std::pair<image_pair_t, int>> verified;
+      for (const auto& [pair_id, num_inliers] : database->ReadTwoViewGeometryNumInliers()) {
+        if (num_inliers >= options.geometry.min_num_inliers)
+          verified.emplace_back(pair_id, num_inliers);
+      }
+      // Pairs tried and rejected before are not candidates again (nor counted as skipped).
+      size_t num_rejected_before = 0;
+      loop_pairs = PairsNotStored(
+          LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors),
+          *database, &num_rejected_before);
+      if (!loop_pairs.empty()) {
+        stats.num_pairs += loop_pairs.size();
+        stats.selection.num_loop_pairs += loop_pairs.size();
+        PARALLAX_LOG(Info) << "Matching: " << loop_pairs.size() << " pairs that close loops (round "
+                           << round + 1 << ": neighbours of verified neighbours) to match";
+        loop_pairs = OrderPairsForLocality(std::move(loop_pairs), image_ids);
+      }
     }
-    // Pairs tried and rejected before are not candidates again (nor counted as skipped).
-    size_t num_rejected_before = 0;
-    std::vector<std::pair<image_t, image_t>> loop_pairs = PairsNotStored(
-        LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors),
-        *database, &num_rejected_before);
+    if (sharing != nullptr) sharing->Share(&loop_pairs);
     if (loop_pairs.empty()) break;
-    stats.num_pairs += loop_pairs.size();
-    stats.selection.num_loop_pairs += loop_pairs.size();
-    PARALLAX_LOG(Info) << "Matching: " << loop_pairs.size() << " pairs that close loops (round "
-                       << round + 1 << ": neighbours of verified neighbours) to match";
-    match_pairs(OrderPairsForLocality(std::move(loop_pairs), image_ids), "matching loops");
+    match_pairs(loop_pairs, "matching loops");
   }
 
   stats.seconds = timer.ElapsedSeconds();

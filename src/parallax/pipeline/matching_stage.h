@@ -66,11 +66,35 @@ struct MatchingStageResult {
   double verification_thread_seconds = 0;
 };
 
+// How the pairs of each round are shared among the ranks of a distributed run
+// (distributed/). Every rank runs the stage; the coordinator chooses the pairs, each rank
+// matches and verifies its share reading the features from the database and storing the
+// results in its own shard, and the coordinator merges the shards into the database.
+class PairSharing {
+ public:
+  virtual ~PairSharing() = default;
+  // Whether this rank chooses the pairs and merges the results.
+  virtual bool IsCoordinator() const = 0;
+  // Every rank gets the coordinator's `pairs`.
+  virtual void Share(std::vector<std::pair<image_t, image_t>>* pairs) const = 0;
+  // This rank's share of `pairs` (the same list on every rank), in their order.
+  virtual std::vector<std::pair<image_t, image_t>> ShareOf(
+      const std::vector<std::pair<image_t, image_t>>& pairs) const = 0;
+  // Where this rank stores its matches and geometries.
+  virtual Database* Store() = 0;
+  // Returns once every rank has stored its share; on the coordinator, after moving every
+  // pair the shards hold and `database` does not into `database`, with their statistics.
+  virtual std::vector<PairMatchStats> Merge(Database* database) = 0;
+};
+
 // Stages 2 and 3: matches SIFT descriptors of the selected pairs (ratio test, cross-check)
 // and verifies them geometrically (F/E/H with LO-RANSAC), writing matches and
 // two_view_geometries in batches, one transaction each. Pairs that already have a two-view
 // geometry are skipped (resume); pairs with stored matches but no geometry are verified
 // from those matches. Keypoints are used as stored (COLMAP's +0.5 pixel-centre convention).
-MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Database* database);
+// With `sharing`, this is one rank's part of a distributed run; the coordinator's result
+// counts the pairs of every rank as matched (thread times are its own).
+MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Database* database,
+                                     PairSharing* sharing = nullptr);
 
 }  // namespace parallax

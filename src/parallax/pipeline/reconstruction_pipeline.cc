@@ -33,7 +33,8 @@ void SetSeedAndThreads(uint64_t seed, int num_threads, bool keep_ba_threads,
 
 ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipelineOptions& options,
                                                        const std::filesystem::path& image_dir,
-                                                       const std::filesystem::path& output_dir) {
+                                                       const std::filesystem::path& output_dir,
+                                                       StageSharing* sharing) {
   options.Check();
   if (!std::filesystem::is_directory(image_dir)) {
     throw MissingFileError(image_dir.string() + ": image folder does not exist");
@@ -48,19 +49,30 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   }
   // 0. Cameras: the intrinsics given, read and checked before anything is written.
   const CameraSetup cameras = LoadCameraSetup(options.extraction.camera);
-  CreateDirectoryOrThrow(output_dir);
-  // One run at a time per output folder and per database; a second stops here, before it
-  // has written anything.
-  const RunLock output_lock(OutputLockPath(output_dir), output_dir.string());
+  const bool coordinator = sharing == nullptr || sharing->IsCoordinator();
   const std::filesystem::path database_path =
       options.database_path.empty() ? output_dir / "database.db" : options.database_path;
-  Database database(database_path);
-  const RunLock database_lock(DatabaseLockPath(database_path), database_path.string());
+  // One run at a time per output folder and per database; a second stops here, before it
+  // has written anything. Of a distributed run, the coordinator holds the locks and creates
+  // the database before the other ranks open it.
+  std::optional<RunLock> output_lock, database_lock;
+  std::optional<Database> coordinator_database;
+  if (coordinator) {
+    CreateDirectoryOrThrow(output_dir);
+    output_lock.emplace(OutputLockPath(output_dir), output_dir.string());
+    coordinator_database.emplace(database_path);
+    database_lock.emplace(DatabaseLockPath(database_path), database_path.string());
+  }
+  if (sharing != nullptr) sharing->Barrier();
+  Database& database =
+      coordinator ? *coordinator_database : coordinator_database.emplace(database_path);
   ReconstructionPipelineResult result;
   Timer timer;
 
   // 1. Features.
-  result.extraction = RunExtractionStage(options.extraction, cameras, image_dir, &database);
+  result.extraction = sharing != nullptr
+                          ? sharing->Extract(options.extraction, cameras, image_dir, &database)
+                          : RunExtractionStage(options.extraction, cameras, image_dir, &database);
   result.timings.emplace_back("features", timer.ElapsedSeconds());
   PARALLAX_LOG(Info) << "features: " << result.extraction.num_extracted << " images extracted, "
                      << result.extraction.num_skipped << " already stored, "
@@ -73,7 +85,8 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
 
   // 2 + 3. Matching and geometric verification.
   timer.Restart();
-  result.matching = RunMatchingStage(options.matching, &database);
+  result.matching = RunMatchingStage(options.matching, &database,
+                                     sharing != nullptr ? sharing->Pairs() : nullptr);
   result.timings.emplace_back("matching", timer.ElapsedSeconds());
   PARALLAX_LOG(Info) << "matching: " << result.matching.num_matched << " pairs matched, "
                      << result.matching.num_skipped << " already stored, "
@@ -84,7 +97,7 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
   timer.Restart();
   MappingStageOptions mapping = options.mapping;
   const std::filesystem::path earlier_model = output_dir / "sparse" / "0";
-  if (options.extend_model_with_new_photos && mapping.input_model.empty() &&
+  if (coordinator && options.extend_model_with_new_photos && mapping.input_model.empty() &&
       mapping.mapper_type == MapperType::kIncremental && mapping.cluster_file.empty() &&
       result.extraction.num_extracted > 0 && HasColmapModel(earlier_model)) {
     mapping.input_model = earlier_model;
@@ -92,8 +105,10 @@ ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipel
                        << " new photos are registered into the earlier run's model ("
                        << earlier_model.string() << "); --remap maps all from scratch";
   }
-  result.mapping = RunMappingStage(mapping, database, image_dir, output_dir);
+  result.mapping = sharing != nullptr ? sharing->Map(mapping, database, image_dir, output_dir)
+                                      : RunMappingStage(mapping, database, image_dir, output_dir);
   result.timings.emplace_back("mapping", timer.ElapsedSeconds());
+  if (!coordinator) return result;
   for (const std::string& line : UnregisteredImageLines(result.mapping)) {
     PARALLAX_LOG(Warning) << line;
   }

@@ -42,6 +42,29 @@ struct ReconstructionPipelineResult {
   bool Success() const { return !mapping.models.empty(); }
 };
 
+// How the ranks of a distributed run share the stages (distributed/, which implements this
+// over MPI). Every rank runs the pipeline with it; the coordinator (rank 0) alone takes the
+// locks, writes the database and the outputs, and returns the result; the others return an
+// empty one after mapping.
+class StageSharing {
+ public:
+  virtual ~StageSharing() = default;
+  virtual bool IsCoordinator() const = 0;
+  // Returns once every rank has called it.
+  virtual void Barrier() = 0;
+  // Stage 1: each rank extracts its share; the coordinator stores them all in `database`.
+  virtual ExtractionStageResult Extract(const ExtractionStageOptions& options,
+                                        const CameraSetup& cameras,
+                                        const std::filesystem::path& image_dir,
+                                        Database* database) = 0;
+  // Stages 2 and 3 (RunMatchingStage's sharing).
+  virtual PairSharing* Pairs() = 0;
+  // Stage 4: on the coordinator, the models and outputs of RunMappingStage.
+  virtual MappingStageResult Map(const MappingStageOptions& options, const Database& database,
+                                 const std::filesystem::path& image_dir,
+                                 const std::filesystem::path& output_dir) = 0;
+};
+
 // The run-wide --seed and --threads of `parallax reconstruct`: the seed of verification and
 // registration, the worker threads of every stage, bundle adjustment's too unless
 // `keep_ba_threads` (--ba-threads was given).
@@ -55,8 +78,10 @@ void SetSeedAndThreads(uint64_t seed, int num_threads, bool keep_ba_threads,
 //   5. outputs: OUT/sparse/<k>/, OUT/points.ply, OUT/summary.json (atomic writes; nothing
 //      but the database is written when no model could be started)
 //   6. evaluation against the ground truth and OUT/report.html, when asked for.
+// With `sharing`, this is one rank's part of a distributed run (see StageSharing).
 ReconstructionPipelineResult RunReconstructionPipeline(const ReconstructionPipelineOptions& options,
                                                        const std::filesystem::path& image_dir,
-                                                       const std::filesystem::path& output_dir);
+                                                       const std::filesystem::path& output_dir,
+                                                       StageSharing* sharing = nullptr);
 
 }  // namespace parallax

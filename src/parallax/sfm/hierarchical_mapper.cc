@@ -34,22 +34,43 @@ std::vector<std::vector<image_t>> HierarchicalMapper::Partition() const {
   return PartitionViewGraph(options_.partition, edges);
 }
 
+std::vector<Reconstruction> HierarchicalMapper::MapCluster(
+    const std::vector<std::vector<image_t>>& clusters, size_t index, int num_side_by_side,
+    ProgressReporter* progress, ClusterReport* report) const {
+  PARALLAX_CHECK_LT(index, clusters.size());
+  PARALLAX_CHECK(report != nullptr);
+  Timer timer;
+  const ImageCluster cluster = MakeImageCluster(input_, clusters[index]);
+  const MapperInput part = ClusterMapperInput(input_, cluster, "cluster");
+  IncrementalMapperOptions options = mapper_options_;
+  for (BundleAdjustmentOptions* ba : options.BundleAdjustments()) {
+    ba->num_threads = std::max(1, EffectiveNumThreads(ba->num_threads) / num_side_by_side);
+  }
+  options.absolute_pose.ransac.random_seed =
+      DeriveSeed(mapper_options_.absolute_pose.ransac.random_seed, index);
+  IncrementalMapper mapper(options, part);
+  if (progress != nullptr) mapper.SetProgress(progress);
+  MapperSummary cluster_summary;
+  std::vector<Reconstruction> models = mapper.Reconstruct(&cluster_summary);
+  report->num_images = cluster.image_names.size();
+  report->num_pairs = cluster.pairs.size();
+  report->model_sizes.clear();
+  for (const Reconstruction& model : models) report->model_sizes.push_back(model.NumRegImages());
+  report->seconds = timer.ElapsedSeconds();
+  return models;
+}
+
 std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
     const std::vector<std::vector<image_t>>& clusters, MapperSummary* summary,
     HierarchicalMapperSummary* hierarchical_summary) {
   PARALLAX_CHECK(summary != nullptr && hierarchical_summary != nullptr);
-  HierarchicalMapperSummary& report = *hierarchical_summary;
-  report = HierarchicalMapperSummary();
+  HierarchicalMapperSummary report;
   report.clusters.resize(clusters.size());
   Timer timer;
 
   // 1. Map every cluster on its own.
   const int num_workers = std::max(
       1, std::min(EffectiveNumThreads(options_.num_threads), static_cast<int>(clusters.size())));
-  IncrementalMapperOptions cluster_options = mapper_options_;
-  for (BundleAdjustmentOptions* ba : cluster_options.BundleAdjustments()) {
-    ba->num_threads = std::max(1, EffectiveNumThreads(ba->num_threads) / num_workers);
-  }
   size_t total_images = 0;
   for (const auto& cluster : clusters) total_images += cluster.size();
   PARALLAX_LOG(Info) << "mapper: " << clusters.size() << " clusters, " << total_images
@@ -57,29 +78,24 @@ std::vector<Reconstruction> HierarchicalMapper::Reconstruct(
   std::vector<std::vector<Reconstruction>> cluster_models(clusters.size());
   ProgressReporter progress("mapping clusters", total_images);
   ParallelFor(0, clusters.size(), num_workers, [&](size_t index) {
-    Timer cluster_timer;
-    const ImageCluster cluster = MakeImageCluster(input_, clusters[index]);
-    const MapperInput part = ClusterMapperInput(input_, cluster, "cluster");
-    IncrementalMapperOptions options = cluster_options;
-    options.absolute_pose.ransac.random_seed =
-        DeriveSeed(cluster_options.absolute_pose.ransac.random_seed, index);
-    IncrementalMapper mapper(options, part);
-    mapper.SetProgress(&progress);
-    MapperSummary cluster_summary;
-    cluster_models[index] = mapper.Reconstruct(&cluster_summary);
-    ClusterReport& cluster_report = report.clusters[index];
-    cluster_report.num_images = cluster.image_names.size();
-    cluster_report.num_pairs = cluster.pairs.size();
-    for (const Reconstruction& model : cluster_models[index]) {
-      cluster_report.model_sizes.push_back(model.NumRegImages());
-    }
-    cluster_report.seconds = cluster_timer.ElapsedSeconds();
+    cluster_models[index] =
+        MapCluster(clusters, index, num_workers, &progress, &report.clusters[index]);
   });
   progress.Finish();
   report.cluster_seconds = timer.ElapsedSeconds();
+  *hierarchical_summary = std::move(report);
+  return MergeAndRefine(std::move(cluster_models), summary, hierarchical_summary);
+}
+
+std::vector<Reconstruction> HierarchicalMapper::MergeAndRefine(
+    std::vector<std::vector<Reconstruction>> cluster_models, MapperSummary* summary,
+    HierarchicalMapperSummary* hierarchical_summary) const {
+  PARALLAX_CHECK(summary != nullptr && hierarchical_summary != nullptr);
+  HierarchicalMapperSummary& report = *hierarchical_summary;
+  PARALLAX_CHECK_EQ(report.clusters.size(), cluster_models.size());
+  Timer timer;
 
   // 2. Merge the clusters' models into one frame.
-  timer.Restart();
   std::vector<Reconstruction> models;
   std::vector<std::pair<size_t, size_t>> origin;  // (cluster, model index) of each model.
   for (size_t index = 0; index < cluster_models.size(); ++index) {

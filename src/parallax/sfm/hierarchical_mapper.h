@@ -2,6 +2,8 @@
 
 #include <vector>
 
+#include "parallax/util/progress.h"
+
 #include "parallax/sfm/image_cluster.h"
 #include "parallax/sfm/incremental_mapper.h"
 #include "parallax/sfm/model_merger.h"
@@ -54,6 +56,20 @@ class HierarchicalMapper {
   std::vector<Reconstruction> Reconstruct(const std::vector<std::vector<image_t>>& clusters,
                                           MapperSummary* summary,
                                           HierarchicalMapperSummary* hierarchical_summary);
+
+  // The two halves of Reconstruct, for a run whose clusters are mapped by other processes
+  // (distributed/). Maps cluster `index` of `clusters` with the incremental mapper (seeded
+  // from the mapper's seed and `index`); with `num_side_by_side` clusters mapped at once on
+  // this machine, each bundle adjustment gets that share of its threads. `progress` may be
+  // null.
+  std::vector<Reconstruction> MapCluster(const std::vector<std::vector<image_t>>& clusters,
+                                         size_t index, int num_side_by_side,
+                                         ProgressReporter* progress, ClusterReport* report) const;
+  // Merges the clusters' models (one list per cluster, in cluster order) and refines the
+  // result over the whole input. `hierarchical_summary->clusters` holds one report per cluster.
+  std::vector<Reconstruction> MergeAndRefine(
+      std::vector<std::vector<Reconstruction>> cluster_models, MapperSummary* summary,
+      HierarchicalMapperSummary* hierarchical_summary) const;
 
  private:
   const HierarchicalMapperOptions options_;
