@@ -14,6 +14,7 @@ packages=(
   chromium
   clang-format-14
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
+  libopenmpi-dev openmpi-bin
 )
 # Extra packages for optional checks, installed when asked: PARALLAX_EXTRA_DEPS=1.
 if [[ "${PARALLAX_EXTRA_DEPS:-0}" == "1" ]]; then

@@ -237,6 +237,7 @@ def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: 
         ratio: float = ...,
         no_cross_check: bool = ...,
         max_error: float = ...,
+        match_batch_size: int = ...,
         ) -> MatchResult: ...
 
 def map(database: PathLike, image_dir: PathLike, output_dir: PathLike, *, seed: int = ..., progress: Progress = ...,
@@ -300,6 +301,7 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         ratio: float = ...,
         no_cross_check: bool = ...,
         max_error: float = ...,
+        match_batch_size: int = ...,
         input_model: Union[str, os.PathLike] = ...,
         init_min_inliers: int = ...,
         init_min_tri_angle: float = ...,

@@ -137,6 +137,10 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
                  "Geometric verification RANSAC threshold, pixels")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--match-batch-size", options->batch_size,
+                 "Pairs stored per transaction: a killed run loses at most one batch of work")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 }
 
 void AddReconstructionOptions(CLI::App& app, ReconstructionPipelineOptions* options) {

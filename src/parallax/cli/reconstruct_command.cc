@@ -4,7 +4,9 @@
 #include "parallax/cli/commands.h"
 #include "parallax/cli/mapper_options_cli.h"
 #include "parallax/cli/pipeline_options_cli.h"
+#include "parallax/distributed/distributed_stages.h"
 #include "parallax/pipeline/reconstruction_pipeline.h"
+#include "parallax/util/logging.h"
 
 namespace parallax::cli {
 
@@ -34,11 +36,27 @@ int RunReconstruct(int argc, char** argv) {
   AddReconstructionOptions(app, &options);
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
-  return RunCommand(app, argc, argv, flags, [&] {
+  // Under mpirun or srun with more than one rank the stages are shared among the ranks
+  // (distributed/distributed_stages.h); otherwise this is a group of one and nothing changes.
+  const ProcessGroup group;
+  const int status = RunCommand(app, argc, argv, flags, [&] {
     SetSeedAndThreads(seed, num_threads, app.count("--ba-threads") > 0, &options);
     options.database_path = database_path;
+    std::optional<DistributedStages> stages;
+    if (group.IsDistributed()) {
+      stages.emplace(group, output_dir);
+      // The other ranks' progress is the coordinator's to tell.
+      if (!group.IsCoordinator() && !flags.verbose) SetLogLevel(LogLevel::kWarning);
+      // Mapping is shared out by clusters, which the incremental mapper does not have.
+      if (app.count("--mapper") == 0) options.mapping.mapper_type = MapperType::kHierarchical;
+      if (group.IsCoordinator()) {
+        PARALLAX_LOG(Info) << "distributed run: " << group.Size() << " ranks, shards in "
+                           << (std::filesystem::path(output_dir) / "shards").string();
+      }
+    }
     const ReconstructionPipelineResult result =
-        RunReconstructionPipeline(options, image_dir, output_dir);
+        RunReconstructionPipeline(options, image_dir, output_dir, stages ? &*stages : nullptr);
+    if (!group.IsCoordinator()) return 0;
     PrintMappingResult(result.mapping, output_dir);
     if (!result.Success()) {
       std::cerr << "error: " << image_dir
@@ -56,6 +74,9 @@ int RunReconstruct(int argc, char** argv) {
               << std::endl;
     return 0;
   });
+  // A rank that failed ends the job: the others may be waiting for it.
+  if (status != 0 && group.IsDistributed()) group.Abort(status);
+  return status;
 }
 
 }  // namespace parallax::cli

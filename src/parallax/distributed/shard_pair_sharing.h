@@ -1,0 +1,45 @@
+#pragma once
+
+#include <filesystem>
+
+#include "parallax/distributed/process_group.h"
+#include "parallax/pipeline/matching_stage.h"
+
+namespace parallax {
+
+// Matching shared among the ranks of a process group: each rank matches blocks of the
+// coordinator's pairs (consecutive pairs, which share images, so a block reuses the
+// descriptors it loads), dealt round robin, into its shard database; the coordinator merges
+// every shard in `shard_dir` into the run's database.
+class ShardPairSharing : public PairSharing {
+ public:
+  // `shard` is this rank's shard database (in `shard_dir`).
+  ShardPairSharing(const ProcessGroup& group, Database* shard, std::filesystem::path shard_dir);
+
+  bool IsCoordinator() const override { return group_.IsCoordinator(); }
+  void Share(std::vector<std::pair<image_t, image_t>>* pairs) const override;
+  std::vector<std::pair<image_t, image_t>> ShareOf(
+      const std::vector<std::pair<image_t, image_t>>& pairs) const override;
+  Database* Store() override { return shard_; }
+  std::vector<PairMatchStats> Merge(Database* database) override;
+
+ private:
+  const ProcessGroup& group_;
+  Database* shard_;
+  const std::filesystem::path shard_dir_;
+};
+
+// Pairs per block when `num_pairs` pairs are dealt to `num_ranks` ranks: about four blocks per
+// rank, so that ranks finish close together, and at most 200 pairs, enough to reuse loaded
+// descriptors.
+size_t PairBlockSize(size_t num_pairs, int num_ranks);
+// The blocks of `pairs` (PairBlockSize) that rank `rank` of `num_ranks` matches: every
+// num_ranks-th block from its own, in order.
+std::vector<std::pair<image_t, image_t>> PairsOfRank(
+    const std::vector<std::pair<image_t, image_t>>& pairs, int rank, int num_ranks);
+
+// Moves the matches and two-view geometries of every pair that `shard` holds and `database`
+// does not into `database` (one transaction); returns their statistics.
+std::vector<PairMatchStats> MergePairsFromShard(const Database& shard, Database* database);
+
+}  // namespace parallax
