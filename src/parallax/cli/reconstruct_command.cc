@@ -56,6 +56,9 @@ int RunReconstruct(int argc, char** argv) {
     }
     const ReconstructionPipelineResult result =
         RunReconstructionPipeline(options, image_dir, output_dir, stages ? &*stages : nullptr);
+    if (stages) {
+      for (const std::string& line : stages->RankReport()) PARALLAX_LOG(Info) << line;
+    }
     if (!group.IsCoordinator()) return 0;
     PrintMappingResult(result.mapping, output_dir);
     if (!result.Success()) {

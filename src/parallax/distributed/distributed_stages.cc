@@ -1,6 +1,8 @@
 #include "parallax/distributed/distributed_stages.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <fstream>
 #include <numeric>
 #include <sstream>
 
@@ -87,6 +89,19 @@ void WriteClusterModels(const std::vector<Reconstruction>& models, const std::st
   if (error) throw InputError(dir.string() + ": cannot rename into place: " + error.message());
 }
 
+// Bytes this process has read and written through system calls (rchar, wchar of
+// /proc/self/io); zeros where that file does not exist.
+std::pair<int64_t, int64_t> ProcessIoBytes() {
+  std::ifstream io("/proc/self/io");
+  std::string key;
+  int64_t value = 0, read = 0, written = 0;
+  while (io >> key >> value) {
+    if (key == "rchar:") read = value;
+    if (key == "wchar:") written = value;
+  }
+  return {read, written};
+}
+
 }  // namespace
 
 std::vector<int> DealByCost(const std::vector<double>& costs, int num_ranks) {
@@ -155,11 +170,14 @@ ExtractionStageResult DistributedStages::Extract(const ExtractionStageOptions& o
       share_options.only_images.push_back(line.substr(tab + 1));
     }
   }
+  const Timer timer;
   ExtractionStageResult own;
   if (!share_options.only_images.empty()) {
     Database shard(ShardPath(FeatureShardDir(), group_.Rank()));
     own = RunExtractionStage(share_options, cameras, image_dir, &shard);
   }
+  num_images_extracted_ += own.num_extracted;
+  extraction_seconds_ += timer.ElapsedSeconds();
   group_.Barrier();
 
   // 3. The coordinator stores every image in name order from the shards.
@@ -168,9 +186,36 @@ ExtractionStageResult DistributedStages::Extract(const ExtractionStageOptions& o
     ExtractionStageOptions merge_options = options;
     merge_options.feature_shards = ListShardDatabases(FeatureShardDir());
     merged = RunExtractionStage(merge_options, cameras, image_dir, database);
+    num_images_total_ = merged.num_images_found;
   }
   group_.Barrier();  // Nobody reads the database before the merge is in.
   return group_.IsCoordinator() ? merged : own;
+}
+
+std::vector<std::string> DistributedStages::RankReport() const {
+  const auto [read, written] = ProcessIoBytes();
+  const std::vector<std::vector<int64_t>> ranks =
+      group_.GatherAll({static_cast<int64_t>(num_images_extracted_),
+                        static_cast<int64_t>(pair_sharing_ ? pair_sharing_->NumPairsShared() : 0),
+                        static_cast<int64_t>(num_clusters_mapped_), read, written,
+                        static_cast<int64_t>(1000 * extraction_seconds_),
+                        static_cast<int64_t>(1000 * cluster_seconds_)});
+  std::vector<std::string> lines;
+  if (!group_.IsCoordinator()) return lines;
+  const double images = static_cast<double>(std::max<size_t>(1, num_images_total_));
+  for (size_t rank = 0; rank < ranks.size(); ++rank) {
+    const std::vector<int64_t>& r = ranks[rank];
+    char line[320];
+    std::snprintf(line, sizeof(line),
+                  "rank %zu: %lld images extracted (%.1f s), %lld pairs matched, %lld clusters "
+                  "mapped (%.1f s); read %.1f MB, wrote %.1f MB (%.2f and %.2f MB per image of "
+                  "the run)",
+                  rank, static_cast<long long>(r[0]), r[5] / 1000.0, static_cast<long long>(r[1]),
+                  static_cast<long long>(r[2]), r[6] / 1000.0, r[3] / 1e6, r[4] / 1e6,
+                  r[3] / 1e6 / images, r[4] / 1e6 / images);
+    lines.emplace_back(line);
+  }
+  return lines;
 }
 
 PairSharing* DistributedStages::Pairs() {
@@ -237,9 +282,11 @@ MappingStageResult DistributedStages::MapClusters(const MappingStageOptions& opt
       const std::vector<Reconstruction> models =
           mapper.MapCluster(clusters, static_cast<size_t>(index), 1, nullptr, &report);
       WriteClusterModels(models, key, dir);
+      ++num_clusters_mapped_;
       PARALLAX_LOG(Info) << "mapper: rank " << group_.Rank() << " mapped cluster " << index << " ("
                          << report.num_images << " images, " << report.seconds << " s)";
     }
+    cluster_seconds_ += timer.ElapsedSeconds();
   }  // The counter's destruction waits for every rank.
   const double cluster_seconds = timer.ElapsedSeconds();
 

@@ -40,6 +40,11 @@ class DistributedStages : public StageSharing {
                          const std::filesystem::path& image_dir,
                          const std::filesystem::path& output_dir) override;
 
+  // What each rank did and the bytes it read and wrote (Linux /proc/self/io: every read and
+  // write call, files and sockets, cached or not), one line per rank, on the coordinator;
+  // empty elsewhere. A collective call: every rank makes it.
+  std::vector<std::string> RankReport() const;
+
  private:
   std::filesystem::path FeatureShardDir() const;
   std::filesystem::path PairShardDir() const;
@@ -52,6 +57,11 @@ class DistributedStages : public StageSharing {
   const std::filesystem::path output_dir_;
   std::unique_ptr<Database> pair_shard_;
   std::unique_ptr<ShardPairSharing> pair_sharing_;
+  size_t num_images_total_ = 0;      // Image files of the run (the coordinator's count).
+  size_t num_images_extracted_ = 0;  // By this rank.
+  size_t num_clusters_mapped_ = 0;   // By this rank.
+  double extraction_seconds_ = 0;    // This rank's share, before the merge.
+  double cluster_seconds_ = 0;       // Mapping its clusters, before the merge.
 };
 
 // Deals `costs` out to `num_ranks` ranks: largest first, each to the rank with the least cost

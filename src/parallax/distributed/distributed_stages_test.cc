@@ -34,7 +34,7 @@ TEST(ProcessGroup, OutsideAnMpiJobIsThisProcessAlone) {
   std::vector<image_t> values = {3, 1, 2};
   group.Broadcast(&values);
   EXPECT_EQ(values, (std::vector<image_t>{3, 1, 2}));
-  EXPECT_EQ(group.SumOverRanks(7), 7);
+  EXPECT_EQ(group.GatherAll({7, 8}), (std::vector<std::vector<int64_t>>{{7, 8}}));
   SharedCounter counter(group);
   EXPECT_EQ(counter.Next(), 0);
   EXPECT_EQ(counter.Next(), 1);

@@ -102,18 +102,24 @@ void ProcessGroup::Broadcast(std::string* bytes) const {
 #endif
 }
 
-int64_t ProcessGroup::SumOverRanks(int64_t value) const {
-  if (!IsDistributed()) return value;
+std::vector<std::vector<int64_t>> ProcessGroup::GatherAll(
+    const std::vector<int64_t>& values) const {
+  if (!IsDistributed()) return {values};
+  std::vector<int64_t> all(values.size() * static_cast<size_t>(size_));
 #ifdef PARALLAX_HAVE_MPI
-  int64_t sum = 0;
   MPI_Request request;
-  CheckMpi(MPI_Iallreduce(&value, &sum, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD, &request),
-           "MPI_Iallreduce");
+  const int count = static_cast<int>(values.size());
+  CheckMpi(MPI_Iallgather(values.data(), count, MPI_INT64_T, all.data(), count, MPI_INT64_T,
+                          MPI_COMM_WORLD, &request),
+           "MPI_Iallgather");
   WaitSleeping(&request);
-  return sum;
-#else
-  return value;
 #endif
+  std::vector<std::vector<int64_t>> by_rank;
+  for (int rank = 0; rank < size_; ++rank) {
+    by_rank.emplace_back(all.begin() + rank * values.size(),
+                         all.begin() + (rank + 1) * values.size());
+  }
+  return by_rank;
 }
 
 void ProcessGroup::Abort(int exit_code) const {

@@ -34,8 +34,8 @@ class ProcessGroup {
   // Every rank gets the coordinator's `values` (trivially copyable elements).
   template <typename T>
   void Broadcast(std::vector<T>* values) const;
-  // The sum of `value` over the ranks, on every rank.
-  int64_t SumOverRanks(int64_t value) const;
+  // Every rank's `values` (the same count on every rank), by rank, on every rank.
+  std::vector<std::vector<int64_t>> GatherAll(const std::vector<int64_t>& values) const;
   // Ends every rank of the job with `exit_code` after an error on this one: the others may be
   // waiting for it in a collective call that would otherwise never return.
   [[noreturn]] void Abort(int exit_code) const;

@@ -46,7 +46,9 @@ std::vector<std::pair<image_t, image_t>> PairsOfRank(
 
 std::vector<std::pair<image_t, image_t>> ShardPairSharing::ShareOf(
     const std::vector<std::pair<image_t, image_t>>& pairs) const {
-  return PairsOfRank(pairs, group_.Rank(), group_.Size());
+  std::vector<std::pair<image_t, image_t>> share = PairsOfRank(pairs, group_.Rank(), group_.Size());
+  num_pairs_shared_ += share.size();
+  return share;
 }
 
 std::vector<PairMatchStats> MergePairsFromShard(const Database& shard, Database* database) {

@@ -22,11 +22,14 @@ class ShardPairSharing : public PairSharing {
       const std::vector<std::pair<image_t, image_t>>& pairs) const override;
   Database* Store() override { return shard_; }
   std::vector<PairMatchStats> Merge(Database* database) override;
+  // Pairs dealt to this rank so far.
+  size_t NumPairsShared() const { return num_pairs_shared_; }
 
  private:
   const ProcessGroup& group_;
   Database* shard_;
   const std::filesystem::path shard_dir_;
+  mutable size_t num_pairs_shared_ = 0;
 };
 
 // Pairs per block when `num_pairs` pairs are dealt to `num_ranks` ranks: about four blocks per
