@@ -3,24 +3,29 @@
 # intrinsics, side by side.
 #
 #   bench/run.sh [DATASET...]        # default: templeRing fountain-P11
-#   bench/run.sh templeRing          # one data set (COLMAP on fountain-P11 takes many minutes)
+#   BENCH_RUNS=2 bench/run.sh templeRing fountain-P11   # issue 21's table: two runs each
 #
-# For each data set (a folder of $PARALLAX_DATA with images/ and ground truth):
+# For each data set (a folder of $PARALLAX_DATA with images/ and ground truth) and each run:
 #   1. parallax reconstruct --intrinsics K (features, matching + verification, mapping);
-#   2. when `colmap` is on the PATH (Debian package colmap, 3.8): feature_extractor (PINHOLE,
-#      one camera, the same K, CPU SIFT), exhaustive_matcher (CPU), mapper (intrinsics fixed);
-#   3. the mapping stage alone on COLMAP's database, i.e. on the same matches:
-#      parallax mapper --database DB against the colmap mapper of step 2;
+#   2. each COLMAP present, one after the other: COLMAP 3.8 (`colmap` on the PATH, Debian's
+#      package) and COLMAP 4.2 (../shared/tools/colmap4/bin/colmap, or $COLMAP4): feature_extractor
+#      (PINHOLE, one camera, the same K, CPU SIFT), exhaustive_matcher (CPU), mapper
+#      (intrinsics fixed);
+#   3. the mapping stage alone on each COLMAP's database, i.e. on the same matches:
+#      parallax mapper --database DB against that COLMAP's mapper;
 #   4. parallax evaluate of every model against the ground truth.
 # Every command runs under /usr/bin/time -v (wall time, peak resident memory). The results go
-# to stdout as a markdown table and to $BENCH_OUT/results.json.
+# to stdout as markdown tables (every ratio COLMAP / Parallax) and to $BENCH_OUT/results.json.
 #
 # Environment:
 #   PARALLAX_DATA     data sets (default: ../shared/data beside the checkout)
 #   PARALLAX_BINARY   the parallax executable (default: build/parallax, then build-*/parallax)
 #   BENCH_OUT         output folder (default: /tmp/parallax-bench-YYYYmmdd-HHMMSS)
-#   BENCH_THREADS     threads for both tools (default: all cores)
+#   BENCH_THREADS     threads for every tool (default: all cores)
+#   BENCH_RUNS        runs of everything per data set (default 1)
 #   BENCH_NO_COLMAP=1 skip COLMAP even when installed
+#   COLMAP4           COLMAP 4 binary (default ../shared/tools/colmap4/bin/colmap; set it up
+#                     with that folder's install-runtime.sh)
 # Needs bash, python3 and GNU time (/usr/bin/time; PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh
 # installs it and COLMAP).
 set -euo pipefail
@@ -33,12 +38,35 @@ out="${BENCH_OUT:-/tmp/parallax-bench-$(date +%Y%m%d-%H%M%S)}"
 datasets=("$@")
 [[ ${#datasets[@]} -eq 0 ]] && datasets=(templeRing fountain-P11)
 
-use_colmap=0
-if [[ "${BENCH_NO_COLMAP:-0}" != "1" ]] && command -v colmap >/dev/null; then use_colmap=1; fi
+runs="${BENCH_RUNS:-1}"
+
+# The COLMAPs to compare with: name, binary, and the flags that changed between versions
+# (4.0 renamed SiftExtraction/SiftMatching to FeatureExtraction/FeatureMatching).
+colmaps=()
+declare -A colmap_binary colmap_extraction colmap_matching
+if [[ "${BENCH_NO_COLMAP:-0}" != "1" ]]; then
+  if command -v colmap >/dev/null && colmap help 2>&1 | grep -q "^COLMAP 3"; then
+    colmaps+=(colmap38)
+    colmap_binary[colmap38]="$(command -v colmap)"
+    colmap_extraction[colmap38]=SiftExtraction
+    colmap_matching[colmap38]=SiftMatching
+  fi
+  colmap4="${COLMAP4:-$repo/../shared/tools/colmap4/bin/colmap}"
+  if [[ -x "$colmap4" ]] && "$colmap4" help 2>&1 | grep -q "^COLMAP 4"; then
+    colmaps+=(colmap42)
+    colmap_binary[colmap42]="$colmap4"
+    colmap_extraction[colmap42]=FeatureExtraction
+    colmap_matching[colmap42]=FeatureMatching
+  fi
+fi
 
 mkdir -p "$out"
-echo "run.sh: parallax $binary, colmap $([[ $use_colmap == 1 ]] && command -v colmap || echo none)," \
-  "$threads threads, results in $out" >&2
+{
+  echo "run.sh: parallax $binary, $threads threads, $runs run(s), results in $out"
+  for tool in "${colmaps[@]}"; do
+    echo "run.sh: $tool = ${colmap_binary[$tool]} ($("${colmap_binary[$tool]}" help 2>&1 | head -1))"
+  done
+} >&2
 
 # timed NAME CMD...: runs CMD with /usr/bin/time -v, log in $run/NAME.log, measures in NAME.time.
 timed() {
@@ -53,7 +81,8 @@ timed() {
 for dataset in "${datasets[@]}"; do
   dir="$data/$dataset"
   [[ -d "$dir/images" ]] || { echo "run.sh: $dir/images not found" >&2; exit 1; }
-  run="$out/$dataset"
+  for ((r = 1; r <= runs; r++)); do
+  run="$out/$dataset/run-$r"
   rm -rf "$run"
   mkdir -p "$run"
 
@@ -74,33 +103,37 @@ for dataset in "${datasets[@]}"; do
   timed parallax "$binary" reconstruct --images "$dir/images" --output "$run/parallax" \
     --intrinsics "$run/K.txt" --threads "$threads" || true
 
-  if [[ $use_colmap == 1 ]]; then
+  for tool in "${colmaps[@]}"; do
     # 2. COLMAP with the same intrinsics, CPU only.
-    db="$run/colmap/database.db"
-    mkdir -p "$run/colmap/sparse"
-    timed colmap_features colmap feature_extractor --database_path "$db" \
+    colmap="${colmap_binary[$tool]}"
+    db="$run/$tool/database.db"
+    mkdir -p "$run/$tool/sparse"
+    timed "${tool}_features" "$colmap" feature_extractor --database_path "$db" \
       --image_path "$dir/images" --ImageReader.camera_model PINHOLE \
       --ImageReader.single_camera 1 --ImageReader.camera_params "$fx,$fy,$cx,$cy" \
-      --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads "$threads" || true
-    timed colmap_matching colmap exhaustive_matcher --database_path "$db" \
-      --SiftMatching.use_gpu 0 --SiftMatching.num_threads "$threads" || true
-    timed colmap_mapping colmap mapper --database_path "$db" --image_path "$dir/images" \
-      --output_path "$run/colmap/sparse" --Mapper.num_threads "$threads" \
+      "--${colmap_extraction[$tool]}.use_gpu" 0 \
+      "--${colmap_extraction[$tool]}.num_threads" "$threads" || true
+    timed "${tool}_matching" "$colmap" exhaustive_matcher --database_path "$db" \
+      "--${colmap_matching[$tool]}.use_gpu" 0 \
+      "--${colmap_matching[$tool]}.num_threads" "$threads" || true
+    timed "${tool}_mapping" "$colmap" mapper --database_path "$db" --image_path "$dir/images" \
+      --output_path "$run/$tool/sparse" --Mapper.num_threads "$threads" \
       --Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_principal_point 0 \
       --Mapper.ba_refine_extra_params 0 || true
-    # 3. Parallax's mapper on COLMAP's database (a copy: the mapper only reads it).
-    cp "$db" "$run/colmap_db_copy.db"
-    timed parallax_mapper "$binary" mapper --database "$run/colmap_db_copy.db" \
-      --image-path "$dir/images" --output "$run/parallax_mapper" --ba-threads "$threads" || true
-  fi
+    # 3. Parallax's mapper on that COLMAP's database (a copy: the mapper only reads it).
+    cp "$db" "$run/${tool}_db_copy.db"
+    timed "parallax_mapper_$tool" "$binary" mapper --database "$run/${tool}_db_copy.db" \
+      --image-path "$dir/images" --output "$run/parallax_mapper_$tool" --ba-threads "$threads" || true
+    rm -f "$run/${tool}_db_copy.db"
+  done
 
   # 4. Accuracy of every model against the ground truth (the largest model of each run).
   if [[ -n "$gt" ]]; then
-    for model_root in parallax/sparse parallax_mapper/sparse colmap/sparse; do
-      [[ -d "$run/$model_root" ]] || continue
-      name="${model_root%%/*}"
+    for name in parallax "${colmaps[@]}" "${colmaps[@]/#/parallax_mapper_}"; do
+      model_root="$run/$name/sparse"
+      [[ -d "$model_root" ]] || continue
       best=""; best_images=-1
-      for model in "$run/$model_root"/*/; do
+      for model in "$model_root"/*/; do
         [[ -f "$model/images.bin" || -f "$model/images.txt" ]] || continue
         if "$binary" evaluate "${model%/}" --gt "$gt" --json >"$run/eval_tmp.json" 2>/dev/null; then
           images="$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["images_registered"])' "$run/eval_tmp.json")"
@@ -113,6 +146,7 @@ for dataset in "${datasets[@]}"; do
       [[ -n "$best" ]] && echo "$best" >"$run/eval_$name.model"
     done
   fi
+  done
 done
 
 python3 "$repo/bench/summarize.py" "$out" "${datasets[@]}"

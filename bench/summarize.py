@@ -54,8 +54,12 @@ def model_stats(evaluation):
     }
 
 
+# The COLMAPs run.sh may have run, with the names the tables give them.
+COLMAPS = [("colmap38", "COLMAP 3.8"), ("colmap42", "COLMAP 4.2")]
+
+
 def summarize(run):
-    result = {"parallax": {}, "colmap": {}, "mapping_only": {}}
+    result = {"parallax": {}}
     parallax = result["parallax"]
     process = read_time(os.path.join(run, "parallax.time")) or {}
     summary = read_json(os.path.join(run, "parallax", "summary.json")) or {}
@@ -83,10 +87,12 @@ def summarize(run):
                  "mean_reprojection_error_px": summary.get("mean_reprojection_error_px")}
     parallax.update(stats)
 
-    stages = {name: read_time(os.path.join(run, f"colmap_{name}.time"))
-              for name in ("features", "matching", "mapping")}
-    if any(stages.values()):
-        colmap = result["colmap"]
+    for tool, _ in COLMAPS:
+        stages = {name: read_time(os.path.join(run, f"{tool}_{name}.time"))
+                  for name in ("features", "matching", "mapping")}
+        if not any(stages.values()):
+            continue
+        colmap = result[tool] = {}
         for name, measured in stages.items():
             colmap[f"{name}_s"] = measured.get("wall_s") if measured else None
         walls = [measured.get("wall_s") for measured in stages.values() if measured]
@@ -94,15 +100,16 @@ def summarize(run):
         colmap["cpu_s"] = sum(measured.get("cpu_s", 0) for measured in stages.values() if measured)
         colmap["peak_rss_mib"] = max(measured.get("peak_rss_mib", 0)
                                      for measured in stages.values() if measured)
-        colmap.update(model_stats(read_json(os.path.join(run, "eval_colmap.json"))))
-        # The mapping stage alone on COLMAP's database (the same matches for both mappers).
-        mapper = read_time(os.path.join(run, "parallax_mapper.time")) or {}
-        result["mapping_only"] = {
+        colmap.update(model_stats(read_json(os.path.join(run, f"eval_{tool}.json"))))
+        # The mapping stage alone on this COLMAP's database (the same matches for both mappers).
+        mapper = read_time(os.path.join(run, f"parallax_mapper_{tool}.time")) or {}
+        colmap["mapping_only"] = {
             "parallax_s": mapper.get("wall_s"),
             "parallax_peak_rss_mib": mapper.get("peak_rss_mib"),
             "colmap_s": colmap.get("mapping_s"),
             "colmap_peak_rss_mib": (stages["mapping"] or {}).get("peak_rss_mib"),
-            "parallax_model": model_stats(read_json(os.path.join(run, "eval_parallax_mapper.json"))),
+            "parallax_model": model_stats(
+                read_json(os.path.join(run, f"eval_parallax_mapper_{tool}.json"))),
         }
     return result
 
@@ -121,15 +128,17 @@ def ratio(numerator, denominator, digits=1):
     return f"{numerator / denominator:.{digits}f}×"
 
 
-def table(dataset, result):
-    p, c, m = result["parallax"], result["colmap"], result["mapping_only"]
-    lines = [f"### {dataset}", "",
-             "| | Parallax | COLMAP 3.8 | COLMAP / Parallax |", "|---|---:|---:|---:|"]
+def table(title, result):
+    p = result["parallax"]
+    tools = [(tool, label) for tool, label in COLMAPS if tool in result]
+    header = "| | Parallax | " + " | ".join(label for _, label in tools) + " | " + \
+        " | ".join(f"{label} / Parallax" for _, label in tools) + " |"
+    lines = [f"### {title}", "", header, "|---|" + "---:|" * (1 + 2 * len(tools))]
 
-    def row(label, key, digits=2, better_low=True, show_ratio=True):
-        pv, cv = p.get(key), c.get(key)
-        lines.append(f"| {label} | {fmt(pv, digits)} | {fmt(cv, digits)} | "
-                     f"{ratio(cv, pv) if show_ratio else ''} |")
+    def row(label, key, digits=2, show_ratio=True):
+        values = [fmt(p.get(key), digits)] + [fmt(result[tool].get(key), digits) for tool, _ in tools]
+        ratios = [ratio(result[tool].get(key), p.get(key)) if show_ratio else "" for tool, _ in tools]
+        lines.append(f"| {label} | " + " | ".join(values + ratios) + " |")
 
     row("features (s)", "features_s")
     row("matching + verification (s)", "matching_s")
@@ -137,25 +146,26 @@ def table(dataset, result):
     row("**total wall (s)**", "total_s")
     row("CPU time, all threads (s)", "cpu_s")
     row("peak memory (MiB)", "peak_rss_mib", 0)
-    lines.append(f"| registered images | {fmt(p.get('images_registered'))} / {fmt(p.get('images_total'))} "
-                 f"| {fmt(c.get('images_registered'))} / {fmt(c.get('images_total'))} | |")
+    registered = [f"{fmt(p.get('images_registered'))} / {fmt(p.get('images_total'))}"] + [
+        f"{fmt(result[tool].get('images_registered'))} / {fmt(result[tool].get('images_total'))}"
+        for tool, _ in tools]
+    lines.append("| registered images | " + " | ".join(registered + [""] * len(tools)) + " |")
     row("3D points", "points3D", 0, show_ratio=False)
     row("observations", "observations", 0, show_ratio=False)
     row("mean track length", "mean_track_length", 2, show_ratio=False)
     row("mean reprojection error (px)", "mean_reprojection_error_px", 3, show_ratio=False)
     row("median centre error (GT units)", "center_error_median", 5, show_ratio=False)
     row("median rotation error (deg)", "rotation_error_deg_median", 3, show_ratio=False)
-    if m:
+    for tool, label in tools:
+        m = result[tool]["mapping_only"]
         model = m.get("parallax_model") or {}
-        lines.append(f"| mapping alone on COLMAP's database (s) | {fmt(m.get('parallax_s'))} "
-                     f"| {fmt(m.get('colmap_s'))} | {ratio(m.get('colmap_s'), m.get('parallax_s'))} |")
-        lines.append(f"| — its registered images / points / mean track length / median centre error | "
-                     f"{fmt(model.get('images_registered'))} / {fmt(model.get('points3D'))} / "
-                     f"{fmt(model.get('mean_track_length'))} / "
-                     f"{fmt(model.get('center_error_median'), 5)} | "
-                     f"{fmt(c.get('images_registered'))} / {fmt(c.get('points3D'))} / "
-                     f"{fmt(c.get('mean_track_length'))} / "
-                     f"{fmt(c.get('center_error_median'), 5)} | |")
+        lines.append("")
+        lines.append(f"Mapping alone on {label}'s database: Parallax {fmt(m.get('parallax_s'))} s, "
+                     f"{label} {fmt(m.get('colmap_s'))} s ({ratio(m.get('colmap_s'), m.get('parallax_s'))}); "
+                     f"Parallax's model {fmt(model.get('images_registered'))} images, "
+                     f"{fmt(model.get('points3D'))} points, mean track length "
+                     f"{fmt(model.get('mean_track_length'))}, median centre error "
+                     f"{fmt(model.get('center_error_median'), 5)}.")
     if "verification_thread_s" in p:
         lines.append("")
         lines.append(f"Parallax thread time: descriptor matching {p['matching_thread_s']:.2f} s, "
@@ -166,10 +176,16 @@ def table(dataset, result):
 
 def main():
     out, datasets = sys.argv[1], sys.argv[2:]
-    results = {dataset: summarize(os.path.join(out, dataset)) for dataset in datasets}
+    results = {}
+    tables = []
+    for dataset in datasets:
+        runs = sorted(name for name in os.listdir(os.path.join(out, dataset))
+                      if name.startswith("run-"))
+        results[dataset] = {run: summarize(os.path.join(out, dataset, run)) for run in runs}
+        tables += [table(f"{dataset}, {run}", results[dataset][run]) for run in runs]
     with open(os.path.join(out, "results.json"), "w") as file:
         json.dump(results, file, indent=2, sort_keys=True)
-    print("\n\n".join(table(dataset, results[dataset]) for dataset in datasets))
+    print("\n\n".join(tables))
     print(f"\n(JSON: {os.path.join(out, 'results.json')})")
 
 

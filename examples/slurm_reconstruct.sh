@@ -4,8 +4,8 @@
 #   sbatch examples/slurm_reconstruct.sh /shared/photos /shared/run-1
 #
 # IMAGES and OUT must be on a filesystem every node sees (the ranks exchange their work through
-# OUT/shards/ and OUT/cluster_models/) and that supports POSIX locks, as SQLite needs (NFSv4,
-# Lustre, BeeGFS with locking on). One rank per node, each using the node's cores with threads:
+# OUT/shards/ and OUT/cluster_models/) with POSIX locks and coherent memory maps, as SQLite's
+# write-ahead log needs: Lustre, GPFS, BeeGFS, not NFS. One rank per node, each using the node's cores with threads:
 # the ranks share out images, pairs and clusters, and the threads work inside each share.
 # If the job is stopped (time limit, preemption, a failed node), submit the same script again:
 # what the database, the shards and the finished clusters hold is not computed again.

@@ -187,6 +187,7 @@ ExtractionStageResult DistributedStages::Extract(const ExtractionStageOptions& o
     merge_options.feature_shards = ListShardDatabases(FeatureShardDir());
     merged = RunExtractionStage(merge_options, cameras, image_dir, database);
     num_images_total_ = merged.num_images_found;
+    database->Checkpoint();  // For the ranks that read it next, maybe on other machines.
   }
   group_.Barrier();  // Nobody reads the database before the merge is in.
   return group_.IsCoordinator() ? merged : own;
@@ -221,8 +222,7 @@ std::vector<std::string> DistributedStages::RankReport() const {
 PairSharing* DistributedStages::Pairs() {
   if (!pair_sharing_) {
     CreateDirectoryOrThrow(PairShardDir());
-    pair_shard_ = std::make_unique<Database>(ShardPath(PairShardDir(), group_.Rank()));
-    pair_sharing_ = std::make_unique<ShardPairSharing>(group_, pair_shard_.get(), PairShardDir());
+    pair_sharing_ = std::make_unique<ShardPairSharing>(group_, PairShardDir());
   }
   return pair_sharing_.get();
 }

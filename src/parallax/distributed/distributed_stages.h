@@ -55,7 +55,6 @@ class DistributedStages : public StageSharing {
 
   const ProcessGroup& group_;
   const std::filesystem::path output_dir_;
-  std::unique_ptr<Database> pair_shard_;
   std::unique_ptr<ShardPairSharing> pair_sharing_;
   size_t num_images_total_ = 0;      // Image files of the run (the coordinator's count).
   size_t num_images_extracted_ = 0;  // By this rank.

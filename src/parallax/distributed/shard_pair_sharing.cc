@@ -14,10 +14,17 @@ size_t PairBlockSize(size_t num_pairs, int num_ranks) {
   return std::clamp<size_t>((num_pairs + blocks - 1) / blocks, 1, 200);
 }
 
-ShardPairSharing::ShardPairSharing(const ProcessGroup& group, Database* shard,
-                                   std::filesystem::path shard_dir)
-    : group_(group), shard_(shard), shard_dir_(std::move(shard_dir)) {
-  PARALLAX_CHECK(shard_ != nullptr);
+ShardPairSharing::ShardPairSharing(const ProcessGroup& group, std::filesystem::path shard_dir)
+    : group_(group), shard_dir_(std::move(shard_dir)) {}
+
+ShardPairSharing::~ShardPairSharing() = default;
+
+Database* ShardPairSharing::Store() {
+  if (!shard_) {
+    shard_ =
+        std::make_unique<Database>(shard_dir_ / ("rank-" + std::to_string(group_.Rank()) + ".db"));
+  }
+  return shard_.get();
 }
 
 void ShardPairSharing::Share(std::vector<std::pair<image_t, image_t>>* pairs) const {
@@ -77,6 +84,7 @@ std::vector<PairMatchStats> MergePairsFromShard(const Database& shard, Database*
 }
 
 std::vector<PairMatchStats> ShardPairSharing::Merge(Database* database) {
+  shard_.reset();  // Closing checkpoints it: the file alone holds what this rank stored.
   group_.Barrier();
   std::vector<PairMatchStats> merged;
   if (group_.IsCoordinator()) {
@@ -89,6 +97,7 @@ std::vector<PairMatchStats> ShardPairSharing::Merge(Database* database) {
       return std::tie(a.image_id1, a.image_id2) < std::tie(b.image_id1, b.image_id2);
     });
     if (!merged.empty()) {
+      database->Checkpoint();  // For the ranks that read it next, maybe on other machines.
       PARALLAX_LOG(Info) << "Matching: " << merged.size() << " pairs merged from the shards in "
                          << shard_dir_.string();
     }

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 
 #include "parallax/distributed/process_group.h"
 #include "parallax/pipeline/matching_stage.h"
@@ -13,22 +14,24 @@ namespace parallax {
 // every shard in `shard_dir` into the run's database.
 class ShardPairSharing : public PairSharing {
  public:
-  // `shard` is this rank's shard database (in `shard_dir`).
-  ShardPairSharing(const ProcessGroup& group, Database* shard, std::filesystem::path shard_dir);
+  // This rank's shard is `shard_dir`/rank-<rank>.db, opened when first needed and closed
+  // while the coordinator merges, so that the file alone holds it.
+  ShardPairSharing(const ProcessGroup& group, std::filesystem::path shard_dir);
+  ~ShardPairSharing() override;
 
   bool IsCoordinator() const override { return group_.IsCoordinator(); }
   void Share(std::vector<std::pair<image_t, image_t>>* pairs) const override;
   std::vector<std::pair<image_t, image_t>> ShareOf(
       const std::vector<std::pair<image_t, image_t>>& pairs) const override;
-  Database* Store() override { return shard_; }
+  Database* Store() override;
   std::vector<PairMatchStats> Merge(Database* database) override;
   // Pairs dealt to this rank so far.
   size_t NumPairsShared() const { return num_pairs_shared_; }
 
  private:
   const ProcessGroup& group_;
-  Database* shard_;
   const std::filesystem::path shard_dir_;
+  std::unique_ptr<Database> shard_;
   mutable size_t num_pairs_shared_ = 0;
 };
 

@@ -96,7 +96,6 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
   const Timer timer;
   MatchingStageResult stats;
   const bool coordinator = sharing == nullptr || sharing->IsCoordinator();
-  Database* const store = sharing != nullptr ? sharing->Store() : database;
 
   std::vector<Image> images = database->ReadAllImages();
   std::sort(images.begin(), images.end(),
@@ -159,6 +158,7 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
                                const char* label) {
     const std::vector<std::pair<image_t, image_t>> pairs =
         sharing != nullptr ? sharing->ShareOf(all_pairs) : all_pairs;
+    Database* const store = sharing != nullptr ? sharing->Store() : database;
     std::vector<PairMatchStats> processed;
     ProgressReporter progress(label, pairs.size());
 

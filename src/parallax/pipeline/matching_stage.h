@@ -80,7 +80,7 @@ class PairSharing {
   // This rank's share of `pairs` (the same list on every rank), in their order.
   virtual std::vector<std::pair<image_t, image_t>> ShareOf(
       const std::vector<std::pair<image_t, image_t>>& pairs) const = 0;
-  // Where this rank stores its matches and geometries.
+  // Where this rank stores its matches and geometries (valid until the next Merge).
   virtual Database* Store() = 0;
   // Returns once every rank has stored its share; on the coordinator, after moving every
   // pair the shards hold and `database` does not into `database`, with their statistics.

@@ -497,6 +497,8 @@ void Database::EndTransaction() {
   Execute("COMMIT;");
 }
 
+void Database::Checkpoint() { Execute("PRAGMA wal_checkpoint(TRUNCATE);"); }
+
 // ----- Cameras ------------------------------------------------------------------------------
 
 camera_t Database::WriteCamera(const Camera& camera, bool use_camera_id) {

@@ -108,6 +108,9 @@ class Database {
   // Explicit transaction around many writes (faster); nesting is not supported.
   void BeginTransaction();
   void EndTransaction();
+  // Moves everything in the write-ahead log into the database file and empties the log, so
+  // that the file alone holds the database (for readers on other machines of a cluster).
+  void Checkpoint();
 
   const std::filesystem::path& Path() const { return path_; }
 

@@ -199,6 +199,25 @@ TEST_F(DatabaseTest, ImagesRoundTrip) {
   EXPECT_EQ(database.NumImages(), 2u);
 }
 
+// After a checkpoint the file alone holds the database: a copy of it without the
+// write-ahead log (what a reader on another machine may see) has every row.
+TEST_F(DatabaseTest, CheckpointLeavesEverythingInTheFile) {
+  Database database(path_);
+  const camera_t camera_id =
+      database.WriteCamera(Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
+  database.WriteImage("a.png", camera_id);
+  const fs::path wal = path_.string() + "-wal";
+  ASSERT_TRUE(fs::exists(wal));
+  EXPECT_GT(fs::file_size(wal), 0u);
+  database.Checkpoint();
+  EXPECT_EQ(fs::file_size(wal), 0u);
+  const fs::path copy = dir_ / "copy.db";
+  fs::copy_file(path_, copy);
+  const Database reader(copy);
+  EXPECT_EQ(reader.NumImages(), 1u);
+  EXPECT_EQ(reader.NumCameras(), 1u);
+}
+
 TEST_F(DatabaseTest, FeaturesRoundTrip) {
   const FeatureKeypoints keypoints = RandomKeypoints(300);
   const FeatureDescriptors descriptors = RandomDescriptors(300);
