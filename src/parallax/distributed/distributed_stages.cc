@@ -183,11 +183,13 @@ ExtractionStageResult DistributedStages::Extract(const ExtractionStageOptions& o
   // 3. The coordinator stores every image in name order from the shards.
   ExtractionStageResult merged;
   if (group_.IsCoordinator()) {
+    const Timer merge_timer;
     ExtractionStageOptions merge_options = options;
     merge_options.feature_shards = ListShardDatabases(FeatureShardDir());
     merged = RunExtractionStage(merge_options, cameras, image_dir, database);
     num_images_total_ = merged.num_images_found;
     database->Checkpoint();  // For the ranks that read it next, maybe on other machines.
+    feature_merge_seconds_ += merge_timer.ElapsedSeconds();
   }
   group_.Barrier();  // Nobody reads the database before the merge is in.
   return group_.IsCoordinator() ? merged : own;
@@ -216,6 +218,13 @@ std::vector<std::string> DistributedStages::RankReport() const {
                   r[3] / 1e6 / images, r[4] / 1e6 / images);
     lines.emplace_back(line);
   }
+  char line[240];
+  std::snprintf(line, sizeof(line),
+                "rank 0 alone: storing the features %.1f s, merging pairs %.1f s, merging and "
+                "refining the clusters' models %.1f s",
+                feature_merge_seconds_, pair_sharing_ ? pair_sharing_->MergeSeconds() : 0.0,
+                model_merge_seconds_);
+  lines.emplace_back(line);
   return lines;
 }
 
@@ -292,6 +301,7 @@ MappingStageResult DistributedStages::MapClusters(const MappingStageOptions& opt
 
   // 3. The coordinator merges the clusters' models and refines.
   if (group_.IsCoordinator()) {
+    const Timer merge_timer;
     std::vector<std::vector<Reconstruction>> cluster_models;
     result.hierarchical.emplace();
     for (size_t index = 0; index < clusters.size(); ++index) {
@@ -310,6 +320,7 @@ MappingStageResult DistributedStages::MapClusters(const MappingStageOptions& opt
     result.models =
         mapper.MergeAndRefine(std::move(cluster_models), &result.summary, &*result.hierarchical);
     ColorizeAndWriteModels(options, image_dir, output_dir, &result);
+    model_merge_seconds_ += merge_timer.ElapsedSeconds();
   }
   group_.Barrier();
   return result;

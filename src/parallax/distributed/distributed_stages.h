@@ -42,7 +42,8 @@ class DistributedStages : public StageSharing {
 
   // What each rank did and the bytes it read and wrote (Linux /proc/self/io: every read and
   // write call, files and sockets, cached or not), one line per rank, on the coordinator;
-  // empty elsewhere. A collective call: every rank makes it.
+  // empty elsewhere; then what the coordinator did alone. A collective call: every rank
+  // makes it.
   std::vector<std::string> RankReport() const;
 
  private:
@@ -61,6 +62,10 @@ class DistributedStages : public StageSharing {
   size_t num_clusters_mapped_ = 0;   // By this rank.
   double extraction_seconds_ = 0;    // This rank's share, before the merge.
   double cluster_seconds_ = 0;       // Mapping its clusters, before the merge.
+  // The coordinator's work alone, while the other ranks wait: storing the features, merging
+  // and refining the clusters' models (with writing the model).
+  double feature_merge_seconds_ = 0;
+  double model_merge_seconds_ = 0;
 };
 
 // Deals `costs` out to `num_ranks` ranks: largest first, each to the rank with the least cost

@@ -5,6 +5,7 @@
 #include "parallax/pipeline/feature_shards.h"
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
+#include "parallax/util/timer.h"
 
 namespace parallax {
 
@@ -88,6 +89,7 @@ std::vector<PairMatchStats> ShardPairSharing::Merge(Database* database) {
   group_.Barrier();
   std::vector<PairMatchStats> merged;
   if (group_.IsCoordinator()) {
+    const Timer timer;
     for (const std::filesystem::path& path : ListShardDatabases(shard_dir_)) {
       const Database shard(path);
       std::vector<PairMatchStats> from_shard = MergePairsFromShard(shard, database);
@@ -99,8 +101,9 @@ std::vector<PairMatchStats> ShardPairSharing::Merge(Database* database) {
     if (!merged.empty()) {
       database->Checkpoint();  // For the ranks that read it next, maybe on other machines.
       PARALLAX_LOG(Info) << "Matching: " << merged.size() << " pairs merged from the shards in "
-                         << shard_dir_.string();
+                         << shard_dir_.string() << " (" << timer.ElapsedSeconds() << " s)";
     }
+    merge_seconds_ += timer.ElapsedSeconds();
   }
   group_.Barrier();  // Nobody reads the database before the merge is in.
   return merged;

@@ -27,12 +27,15 @@ class ShardPairSharing : public PairSharing {
   std::vector<PairMatchStats> Merge(Database* database) override;
   // Pairs dealt to this rank so far.
   size_t NumPairsShared() const { return num_pairs_shared_; }
+  // Seconds the coordinator spent merging shards (the other ranks wait meanwhile).
+  double MergeSeconds() const { return merge_seconds_; }
 
  private:
   const ProcessGroup& group_;
   const std::filesystem::path shard_dir_;
   std::unique_ptr<Database> shard_;
   mutable size_t num_pairs_shared_ = 0;
+  double merge_seconds_ = 0;
 };
 
 // Pairs per block when `num_pairs` pairs are dealt to `num_ranks` ranks: about four blocks per
