@@ -30,6 +30,10 @@ def read_time(path):
         result["peak_rss_mib"] = int(rss.group(1)) / 1024.0
     status = re.search(r"Exit status: (\d+)", text)
     result["exit_status"] = int(status.group(1)) if status else None
+    if result["exit_status"]:
+        # A failed command's time measures nothing worth comparing.
+        result["wall_s"] = None
+        result["failed"] = True
     return result
 
 
@@ -105,6 +109,7 @@ def summarize(run):
         mapper = read_time(os.path.join(run, f"parallax_mapper_{tool}.time")) or {}
         colmap["mapping_only"] = {
             "parallax_s": mapper.get("wall_s"),
+            "parallax_failed": mapper.get("failed", False),
             "parallax_peak_rss_mib": mapper.get("peak_rss_mib"),
             "colmap_s": colmap.get("mapping_s"),
             "colmap_peak_rss_mib": (stages["mapping"] or {}).get("peak_rss_mib"),
@@ -160,6 +165,10 @@ def table(title, result):
         m = result[tool]["mapping_only"]
         model = m.get("parallax_model") or {}
         lines.append("")
+        if m.get("parallax_failed"):
+            lines.append(f"Mapping alone on {label}'s database: Parallax failed "
+                         f"(parallax_mapper_{tool}.log).")
+            continue
         lines.append(f"Mapping alone on {label}'s database: Parallax {fmt(m.get('parallax_s'))} s, "
                      f"{label} {fmt(m.get('colmap_s'))} s ({ratio(m.get('colmap_s'), m.get('parallax_s'))}); "
                      f"Parallax's model {fmt(model.get('images_registered'))} images, "
