@@ -76,7 +76,9 @@ TEST(PairsOfRank, EveryPairToExactlyOneRankInBlocksOfConsecutivePairs) {
         EXPECT_LT(std::find(pairs.begin(), pairs.end(), share[k - 1]),
                   std::find(pairs.begin(), pairs.end(), share[k]));
       }
-      if (num_ranks > 1) EXPECT_LT(share.size(), pairs.size());
+      if (num_ranks > 1) {
+        EXPECT_LT(share.size(), pairs.size());
+      }
     }
     const std::multiset<std::pair<image_t, image_t>> all(pairs.begin(), pairs.end());
     EXPECT_EQ(seen, all) << num_ranks << " ranks";
