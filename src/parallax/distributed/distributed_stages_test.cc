@@ -179,10 +179,13 @@ TEST(FeatureShardIndex, FindsFeaturesOnlyForTheFileAsItIsNow) {
     EXPECT_EQ(found->descriptors.rows(), 2);
     EXPECT_EQ(found->descriptors(1, 127), 7);
     EXPECT_FALSE(index.Find(dir.path() / "b.jpg").has_value());
+    EXPECT_TRUE(index.Holds(image));
+    EXPECT_FALSE(index.Holds(dir.path() / "b.jpg"));
   }
   // Another photo under the same name: the shard's features are not for it.
   std::ofstream(image, std::ios::app) << " with more bytes";
   EXPECT_FALSE(FeatureShardIndex(shards).Find(image).has_value());
+  EXPECT_FALSE(FeatureShardIndex(shards).Holds(image));
 }
 
 }  // namespace

@@ -156,7 +156,7 @@ std::vector<std::filesystem::path> ImagesToExtract(const ExtractionStageOptions&
         StoredFeaturesAreCurrent(*image_id, path, database, &unused)) {
       continue;
     }
-    if (shards && shards->Find(path)) continue;
+    if (shards && shards->Holds(path)) continue;
     to_extract.push_back(path);
   }
   return to_extract;

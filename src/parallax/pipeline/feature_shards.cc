@@ -26,17 +26,21 @@ FeatureShardIndex::FeatureShardIndex(const std::vector<std::filesystem::path>& s
 
 FeatureShardIndex::~FeatureShardIndex() = default;
 
-std::optional<ShardImageFeatures> FeatureShardIndex::Find(const std::filesystem::path& path) const {
+bool FeatureShardIndex::Holds(const std::filesystem::path& path) const {
   const auto entry = entries_.find(path.filename().string());
-  if (entry == entries_.end()) return std::nullopt;
+  if (entry == entries_.end()) return false;
   std::error_code error;
   const uint64_t size = static_cast<uint64_t>(std::filesystem::file_size(path, error));
-  if (error || size != entry->second.fingerprint.size) return std::nullopt;
+  if (error || size != entry->second.fingerprint.size) return false;
   const auto mtime = std::filesystem::last_write_time(path, error);
   const int64_t mtime_ns =
       std::chrono::duration_cast<std::chrono::nanoseconds>(mtime.time_since_epoch()).count();
-  if (error || mtime_ns != entry->second.fingerprint.mtime_ns) return std::nullopt;
+  return !error && mtime_ns == entry->second.fingerprint.mtime_ns;
+}
 
+std::optional<ShardImageFeatures> FeatureShardIndex::Find(const std::filesystem::path& path) const {
+  if (!Holds(path)) return std::nullopt;
+  const auto entry = entries_.find(path.filename().string());
   const std::lock_guard<std::mutex> lock(mutex_);
   const Database& shard = *shards_[entry->second.shard];
   const image_t image_id = entry->second.image_id;

@@ -34,6 +34,8 @@ class FeatureShardIndex {
   // The features stored for the file at `path` (by its file name) when they were computed
   // from the file as it is now (same size and modification time); nullopt otherwise.
   std::optional<ShardImageFeatures> Find(const std::filesystem::path& path) const;
+  // Whether Find would give them, without reading them.
+  bool Holds(const std::filesystem::path& path) const;
 
  private:
   struct Entry {
