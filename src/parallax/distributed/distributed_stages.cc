@@ -62,11 +62,17 @@ std::vector<Reconstruction> ReadClusterModels(const std::filesystem::path& dir) 
   return models;
 }
 
+// Whether `dir` holds the finished models of a cluster of the same images (the key is
+// written last, after the models).
+bool ClusterIsFinished(const std::filesystem::path& dir, const std::string& key) {
+  const std::filesystem::path key_path = dir / "images.txt";
+  return std::filesystem::exists(key_path) && ReadFileToString(key_path) == key;
+}
+
 // The finished models of a cluster when `dir` holds them for the same images.
 std::optional<std::vector<Reconstruction>> FinishedClusterModels(const std::filesystem::path& dir,
                                                                  const std::string& key) {
-  const std::filesystem::path key_path = dir / "images.txt";
-  if (!std::filesystem::exists(key_path) || ReadFileToString(key_path) != key) return std::nullopt;
+  if (!ClusterIsFinished(dir, key)) return std::nullopt;
   return ReadClusterModels(dir);
 }
 
@@ -283,7 +289,7 @@ MappingStageResult DistributedStages::MapClusters(const MappingStageOptions& opt
          index = next_cluster.Next()) {
       const std::filesystem::path dir = models_dir / ("cluster-" + std::to_string(index));
       const std::string key = ClusterKey(clusters[index]);
-      if (FinishedClusterModels(dir, key)) {
+      if (ClusterIsFinished(dir, key)) {
         PARALLAX_LOG(Info) << "mapper: cluster " << index << " mapped by an earlier run";
         continue;
       }
