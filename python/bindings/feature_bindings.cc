@@ -46,10 +46,15 @@ cv::Mat GrayImage(const py::array& image) {
   return gray;
 }
 
-py::tuple ExtractSift(const py::array& image, int max_features, int max_image_size,
-                      int max_upsampled_size, double sift_contrast, double sift_edge,
-                      bool root_sift) {
+py::tuple ExtractSift(const py::array& image, const std::string& sift, int max_features,
+                      int max_image_size, int max_upsampled_size, double sift_contrast,
+                      double sift_edge, bool root_sift) {
   SiftExtractionOptions options = ExtractionStageOptions().sift;
+  if (sift != "native" && sift != "opencv") {
+    throw py::value_error("sift must be 'native' or 'opencv', not '" + sift + "'");
+  }
+  options.implementation =
+      sift == "opencv" ? SiftImplementation::kOpenCv : SiftImplementation::kNative;
   options.max_num_features = max_features;
   options.max_image_size = max_image_size;
   options.max_upsampled_image_size = max_upsampled_size;
@@ -108,6 +113,7 @@ py::array_t<uint8_t> ReadImage(const std::filesystem::path& path, bool grayscale
 void BindFeatures(py::module_& m) {
   const SiftExtractionOptions defaults = ExtractionStageOptions().sift;
   m.def("extract_sift", &ExtractSift, py::arg("image"), py::kw_only(),
+        py::arg("sift") = std::string(SiftImplementationName(defaults.implementation)),
         py::arg("max_features") = defaults.max_num_features,
         py::arg("max_image_size") = defaults.max_image_size,
         py::arg("max_upsampled_size") = defaults.max_upsampled_image_size,

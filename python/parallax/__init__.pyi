@@ -173,8 +173,8 @@ def dlt_resection(points2D: FloatArray, points3D: FloatArray, *, max_error: floa
                   seed: int = ...) -> EstimationResult: ...
 def triangulate_points(proj_matrix1: FloatArray, proj_matrix2: FloatArray, points1: FloatArray,
                        points2: FloatArray) -> FloatArray: ...
-def extract_sift(image: npt.NDArray[Any], *, max_features: int = ..., max_image_size: int = ...,
-                 max_upsampled_size: int = ..., sift_contrast: float = ...,
+def extract_sift(image: npt.NDArray[Any], *, sift: str = ..., max_features: int = ...,
+                 max_image_size: int = ..., max_upsampled_size: int = ..., sift_contrast: float = ...,
                  sift_edge: float = ..., root_sift: bool = ...
                  ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.uint8]]: ...
 
@@ -216,6 +216,8 @@ def extract_features(image_dir: PathLike, database: PathLike, *, threads: int = 
         sift_contrast: float = ...,
         sift_edge: float = ...,
         no_root_sift: bool = ...,
+        sift: Union[str, os.PathLike] = ...,
+        sift_max_orientations: int = ...,
         ) -> ExtractionResult: ...
 
 def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: Progress = ...,
@@ -283,6 +285,8 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         sift_contrast: float = ...,
         sift_edge: float = ...,
         no_root_sift: bool = ...,
+        sift: Union[str, os.PathLike] = ...,
+        sift_max_orientations: int = ...,
         pairs: Union[str, os.PathLike] = ...,
         auto_exhaustive_max_images: int = ...,
         overlap: int = ...,

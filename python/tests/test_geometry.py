@@ -149,6 +149,8 @@ def test_too_few_points_fail_without_a_model():
     (lambda: parallax.Camera("FISHEYE", 640, 480, [1, 2, 3]), "unknown camera model 'FISHEYE'"),
     (lambda: parallax.Camera("PINHOLE", 640, 480, [1, 2, 3]), "PINHOLE takes 4 parameters"),
     (lambda: parallax.extract_sift(np.zeros((8, 8), np.uint8)), "at least 16 x 16"),
+    (lambda: parallax.extract_sift(np.zeros((32, 32), np.uint8), sift="vlfeat"),
+     "sift must be 'native' or 'opencv'"),
 ])
 def test_bad_input_raises_value_error(call, message):
     with pytest.raises(ValueError, match=message):
@@ -170,3 +172,8 @@ def test_extract_sift_on_an_image(scene_dir):
     rgb = parallax.read_image(path)
     assert rgb.shape == (480, 640, 3)
     assert parallax.extract_sift(rgb, max_features=1000)[0].shape[0] > 300
+    # OpenCV's SIFT finds most of the same places (its positions are a quarter pixel off).
+    opencv_keypoints, _ = parallax.extract_sift(image, sift="opencv", max_features=1000)
+    assert 300 < opencv_keypoints.shape[0] <= 1000
+    offsets = np.linalg.norm(opencv_keypoints[:, None, :2] - keypoints[None, :, :2], axis=2)
+    assert (offsets.min(axis=1) < 0.5).mean() > 0.6

@@ -60,6 +60,21 @@ void AddExtractionOptions(CLI::App& app, ExtractionStageOptions* options) {
       ->check(CLI::PositiveNumber);
   app.add_flag("!--no-root-sift", options->sift.root_sift,
                "Plain L2-normalised SIFT instead of RootSIFT");
+  SiftExtractionOptions& sift = options->sift;
+  app.add_option_function<std::string>(
+         "--sift",
+         [&sift](const std::string& name) {
+           sift.implementation =
+               name == "opencv" ? SiftImplementation::kOpenCv : SiftImplementation::kNative;
+         },
+         "SIFT implementation: native (Parallax's own: float descriptors before RootSIFT, "
+         "exact positions) or opencv (OpenCV's cv::SIFT)")
+      ->default_str(SiftImplementationName(sift.implementation))
+      ->check(CLI::IsMember({"native", "opencv"}));
+  app.add_option("--sift-max-orientations", sift.max_num_orientations,
+                 "Native SIFT: keypoints per extremum with distinct dominant orientations")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 }
 
 void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {

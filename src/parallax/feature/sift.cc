@@ -6,6 +6,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "parallax/feature/native_sift.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
@@ -37,6 +38,61 @@ void ConvertDescriptor(const float* raw, bool root_sift, uint8_t* out) {
   QuantiseUnitDescriptor(unit, out);
 }
 
+// A frame before ranking, in the coordinates of the image the extractor was given.
+struct Candidate {
+  float x, y, scale, orientation, response;
+  const float* descriptor;  // 128 raw floats, any positive scale.
+};
+
+// The image SIFT runs on: the input downscaled to max_image_size, and the factors that take
+// its coordinates back to the input's.
+struct SiftInput {
+  cv::Mat image;
+  double scale_x = 1.0, scale_y = 1.0;
+};
+
+SiftInput DownscaleToMaxSize(const cv::Mat& gray, int max_image_size) {
+  SiftInput input{gray};
+  const int longest = std::max(gray.cols, gray.rows);
+  if (longest > max_image_size) {
+    const double factor = static_cast<double>(max_image_size) / longest;
+    const int width = std::max(1, static_cast<int>(std::lround(gray.cols * factor)));
+    const int height = std::max(1, static_cast<int>(std::lround(gray.rows * factor)));
+    cv::resize(gray, input.image, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+    input.scale_x = static_cast<double>(gray.cols) / width;
+    input.scale_y = static_cast<double>(gray.rows) / height;
+  }
+  return input;
+}
+
+// Keeps the strongest max_num_features candidates and stores them, strongest first, in the
+// input image's coordinates. The order is total, so it never depends on the detector's.
+void StoreStrongest(std::vector<Candidate>* candidates, const SiftExtractionOptions& options,
+                    double scale_x, double scale_y, FeatureKeypoints* keypoints,
+                    FeatureDescriptors* descriptors) {
+  std::sort(candidates->begin(), candidates->end(), [](const Candidate& a, const Candidate& b) {
+    if (a.response != b.response) return a.response > b.response;
+    if (a.y != b.y) return a.y < b.y;
+    if (a.x != b.x) return a.x < b.x;
+    if (a.scale != b.scale) return a.scale < b.scale;
+    if (a.orientation != b.orientation) return a.orientation < b.orientation;
+    return a.descriptor < b.descriptor;
+  });
+  if (candidates->size() > static_cast<size_t>(options.max_num_features)) {
+    candidates->resize(options.max_num_features);
+  }
+  keypoints->reserve(candidates->size());
+  descriptors->resize(static_cast<Eigen::Index>(candidates->size()), 128);
+  for (size_t i = 0; i < candidates->size(); ++i) {
+    const Candidate& candidate = (*candidates)[i];
+    keypoints->emplace_back(
+        static_cast<float>(scale_x * candidate.x), static_cast<float>(scale_y * candidate.y),
+        static_cast<float>(0.5 * (scale_x + scale_y) * candidate.scale), candidate.orientation);
+    ConvertDescriptor(candidate.descriptor, options.root_sift,
+                      descriptors->row(static_cast<Eigen::Index>(i)).data());
+  }
+}
+
 class OpenCvSiftExtractor : public FeatureExtractor {
  public:
   explicit OpenCvSiftExtractor(const SiftExtractionOptions& options) : options_(options) {
@@ -52,29 +108,18 @@ class OpenCvSiftExtractor : public FeatureExtractor {
     descriptors->resize(0, 128);
     if (gray.empty()) return;
 
-    // Downscale so the longest side is at most max_image_size; keypoints are mapped back.
-    cv::Mat image = gray;
-    double scale_x = 1.0, scale_y = 1.0;
-    const int longest = std::max(gray.cols, gray.rows);
-    if (longest > options_.max_image_size) {
-      const double factor = static_cast<double>(options_.max_image_size) / longest;
-      const int width = std::max(1, static_cast<int>(std::lround(gray.cols * factor)));
-      const int height = std::max(1, static_cast<int>(std::lround(gray.rows * factor)));
-      cv::resize(gray, image, cv::Size(width, height), 0, 0, cv::INTER_AREA);
-      scale_x = static_cast<double>(gray.cols) / width;
-      scale_y = static_cast<double>(gray.rows) / height;
-    }
+    SiftInput input = DownscaleToMaxSize(gray, options_.max_image_size);
     // A half-size image doubled by OpenCV is the original at sigma 1.6: what a Gaussian of
     // that width leaves above the half-size Nyquist frequency is under 5 %.
     if (options_.max_upsampled_image_size > 0 &&
-        std::max(image.cols, image.rows) > options_.max_upsampled_image_size) {
-      const int width = std::max(1, image.cols / 2);
-      const int height = std::max(1, image.rows / 2);
+        std::max(input.image.cols, input.image.rows) > options_.max_upsampled_image_size) {
+      const int width = std::max(1, input.image.cols / 2);
+      const int height = std::max(1, input.image.rows / 2);
       cv::Mat half;
-      cv::resize(image, half, cv::Size(width, height), 0, 0, cv::INTER_AREA);
-      scale_x *= static_cast<double>(image.cols) / width;
-      scale_y *= static_cast<double>(image.rows) / height;
-      image = half;
+      cv::resize(input.image, half, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+      input.scale_x *= static_cast<double>(input.image.cols) / width;
+      input.scale_y *= static_cast<double>(input.image.rows) / height;
+      input.image = half;
     }
 
     // OpenCV keeps the strongest `nfeatures` before computing descriptors, plus any ties at
@@ -84,45 +129,69 @@ class OpenCvSiftExtractor : public FeatureExtractor {
                          options_.contrast_threshold, options_.edge_threshold, options_.sigma);
     std::vector<cv::KeyPoint> cv_keypoints;
     cv::Mat cv_descriptors;
-    sift->detectAndCompute(image, cv::noArray(), cv_keypoints, cv_descriptors);
+    sift->detectAndCompute(input.image, cv::noArray(), cv_keypoints, cv_descriptors);
     if (cv_keypoints.empty()) return;
     PARALLAX_CHECK_EQ(cv_descriptors.type(), CV_32F);
     PARALLAX_CHECK_EQ(cv_descriptors.cols, 128);
     PARALLAX_CHECK_EQ(static_cast<size_t>(cv_descriptors.rows), cv_keypoints.size());
 
-    // Strongest first, with a total order so the output never depends on the input order.
-    std::vector<int> order(cv_keypoints.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
-      const cv::KeyPoint& ka = cv_keypoints[a];
-      const cv::KeyPoint& kb = cv_keypoints[b];
-      if (ka.response != kb.response) return ka.response > kb.response;
-      if (ka.pt.y != kb.pt.y) return ka.pt.y < kb.pt.y;
-      if (ka.pt.x != kb.pt.x) return ka.pt.x < kb.pt.x;
-      if (ka.size != kb.size) return ka.size < kb.size;
-      if (ka.angle != kb.angle) return ka.angle < kb.angle;
-      return a < b;
-    });
-    if (order.size() > static_cast<size_t>(options_.max_num_features)) {
-      order.resize(options_.max_num_features);
-    }
-
     constexpr double kDegreesToRadians = 3.14159265358979323846 / 180.0;
-    keypoints->reserve(order.size());
-    descriptors->resize(static_cast<Eigen::Index>(order.size()), 128);
-    for (size_t i = 0; i < order.size(); ++i) {
-      const cv::KeyPoint& keypoint = cv_keypoints[order[i]];
+    std::vector<Candidate> candidates;
+    candidates.reserve(cv_keypoints.size());
+    for (size_t i = 0; i < cv_keypoints.size(); ++i) {
+      const cv::KeyPoint& keypoint = cv_keypoints[i];
       // OpenCV: pixel centres at integers, size = 2 sigma, angle in degrees measured in image
       // coordinates (y down). COLMAP: pixel centres at +0.5, scale = sigma, radians.
-      const double x = scale_x * (keypoint.pt.x + 0.5);
-      const double y = scale_y * (keypoint.pt.y + 0.5);
-      const double scale = 0.5 * (scale_x + scale_y) * 0.5 * keypoint.size;
       const double orientation = keypoint.angle < 0 ? 0.0 : keypoint.angle * kDegreesToRadians;
-      keypoints->emplace_back(static_cast<float>(x), static_cast<float>(y),
-                              static_cast<float>(scale), static_cast<float>(orientation));
-      ConvertDescriptor(cv_descriptors.ptr<float>(order[i]), options_.root_sift,
-                        descriptors->row(static_cast<Eigen::Index>(i)).data());
+      candidates.push_back({keypoint.pt.x + 0.5f, keypoint.pt.y + 0.5f, 0.5f * keypoint.size,
+                            static_cast<float>(orientation), keypoint.response,
+                            cv_descriptors.ptr<float>(static_cast<int>(i))});
     }
+    StoreStrongest(&candidates, options_, input.scale_x, input.scale_y, keypoints, descriptors);
+  }
+
+ private:
+  SiftExtractionOptions options_;
+};
+
+class NativeSiftExtractor : public FeatureExtractor {
+ public:
+  explicit NativeSiftExtractor(const SiftExtractionOptions& options) : options_(options) {
+    options_.Check();
+  }
+
+  void Extract(const cv::Mat& gray, FeatureKeypoints* keypoints,
+               FeatureDescriptors* descriptors) const override {
+    PARALLAX_CHECK(keypoints != nullptr);
+    PARALLAX_CHECK(descriptors != nullptr);
+    PARALLAX_CHECK_EQ(gray.type(), CV_8UC1);
+    keypoints->clear();
+    descriptors->resize(0, 128);
+    if (gray.empty()) return;
+
+    const SiftInput input = DownscaleToMaxSize(gray, options_.max_image_size);
+    NativeSiftOptions sift;
+    sift.double_first_octave =
+        options_.max_upsampled_image_size == 0 ||
+        std::max(input.image.cols, input.image.rows) <= options_.max_upsampled_image_size;
+    sift.num_octave_layers = options_.num_octave_layers;
+    sift.contrast_threshold = options_.contrast_threshold;
+    sift.edge_threshold = options_.edge_threshold;
+    sift.sigma = options_.sigma;
+    sift.max_num_orientations = options_.max_num_orientations;
+    sift.max_num_features = options_.max_num_features;
+    std::vector<SiftFrame> frames;
+    std::vector<float> raw_descriptors;
+    ComputeNativeSift(input.image, sift, &frames, &raw_descriptors);
+
+    std::vector<Candidate> candidates;
+    candidates.reserve(frames.size());
+    for (size_t i = 0; i < frames.size(); ++i) {
+      const SiftFrame& frame = frames[i];
+      candidates.push_back({frame.x, frame.y, frame.scale, frame.orientation, frame.response,
+                            raw_descriptors.data() + 128 * i});
+    }
+    StoreStrongest(&candidates, options_, input.scale_x, input.scale_y, keypoints, descriptors);
   }
 
  private:
@@ -139,10 +208,22 @@ void SiftExtractionOptions::Check() const {
   PARALLAX_CHECK_GT(contrast_threshold, 0.0);
   PARALLAX_CHECK_GT(edge_threshold, 0.0);
   PARALLAX_CHECK_GT(sigma, 0.0);
+  PARALLAX_CHECK_GT(max_num_orientations, 0);
 }
 
 std::unique_ptr<FeatureExtractor> CreateSiftExtractor(const SiftExtractionOptions& options) {
-  return std::make_unique<OpenCvSiftExtractor>(options);
+  switch (options.implementation) {
+    case SiftImplementation::kNative:
+      return std::make_unique<NativeSiftExtractor>(options);
+    case SiftImplementation::kOpenCv:
+      return std::make_unique<OpenCvSiftExtractor>(options);
+  }
+  PARALLAX_CHECK_MSG(false, "unknown SIFT implementation");
+  return nullptr;
+}
+
+const char* SiftImplementationName(SiftImplementation implementation) {
+  return implementation == SiftImplementation::kNative ? "native" : "opencv";
 }
 
 }  // namespace parallax

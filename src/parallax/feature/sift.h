@@ -7,8 +7,15 @@
 
 namespace parallax {
 
+// Which SIFT computes the features (both store the same frame and descriptor conventions).
+enum class SiftImplementation {
+  kNative,  // Parallax's own (native_sift.h): float descriptors, exact positions.
+  kOpenCv,  // OpenCV's cv::SIFT.
+};
+
 // SIFT settings; defaults are the paper's (Lowe 2004 as configured in Zeeshan et al.).
 struct SiftExtractionOptions {
+  SiftImplementation implementation = SiftImplementation::kNative;
   int max_num_features = 8192;  // Keep the strongest (largest response) keypoints.
   int max_image_size = 3200;    // Downscale larger images (longest side), rescale keypoints.
   // OpenCV's SIFT always doubles the image for its first octave (Lowe's -1 octave). Above this
@@ -21,6 +28,9 @@ struct SiftExtractionOptions {
   double edge_threshold = 10.0;
   double sigma = 1.6;
   bool root_sift = true;  // L1-normalise, square-root (Arandjelovic & Zisserman 2012).
+  // Native SIFT: frames per extremum with distinct dominant orientations (COLMAP's 2).
+  // OpenCV's makes one per histogram peak within 80 % of the highest, without a cap.
+  int max_num_orientations = 2;
   void Check() const;
 };
 
@@ -35,5 +45,8 @@ class FeatureExtractor {
 };
 
 std::unique_ptr<FeatureExtractor> CreateSiftExtractor(const SiftExtractionOptions& options);
+
+// "native" or "opencv", as the command line spells them.
+const char* SiftImplementationName(SiftImplementation implementation);
 
 }  // namespace parallax

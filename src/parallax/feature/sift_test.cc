@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 
 #include "parallax/feature/matcher.h"
@@ -50,7 +51,24 @@ double Median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
-TEST(Sift, RotatedAndScaledCopyIsMatchedConsistently) {
+// The tests that hold for both implementations run once for each.
+class SiftTest : public ::testing::TestWithParam<SiftImplementation> {
+ protected:
+  SiftExtractionOptions Options() const {
+    SiftExtractionOptions options;
+    options.implementation = GetParam();
+    return options;
+  }
+};
+
+INSTANTIATE_TEST_SUITE_P(Implementations, SiftTest,
+                         ::testing::Values(SiftImplementation::kNative,
+                                           SiftImplementation::kOpenCv),
+                         [](const ::testing::TestParamInfo<SiftImplementation>& info) {
+                           return std::string(SiftImplementationName(info.param));
+                         });
+
+TEST_P(SiftTest, RotatedAndScaledCopyIsMatchedConsistently) {
   const cv::Mat image1 = TexturedImage(480, 360, 600);
   // image2 = image1 rotated by 30 degrees and scaled by 0.8 about the centre (OpenCV pixel
   // convention: integer pixel centres).
@@ -64,7 +82,7 @@ TEST(Sift, RotatedAndScaledCopyIsMatchedConsistently) {
       warp.at<double>(1, 1);
   offset << warp.at<double>(0, 2), warp.at<double>(1, 2);
 
-  const auto extractor = CreateSiftExtractor(SiftExtractionOptions());
+  const auto extractor = CreateSiftExtractor(Options());
   FeatureKeypoints keypoints1, keypoints2;
   FeatureDescriptors descriptors1, descriptors2;
   extractor->Extract(image1, &keypoints1, &descriptors1);
@@ -99,10 +117,10 @@ TEST(Sift, RotatedAndScaledCopyIsMatchedConsistently) {
   EXPECT_LT(Median(orientation_errors), 3.0 * kPi / 180.0);
 }
 
-TEST(Sift, DescriptorsAreQuantisedUnitVectors) {
+TEST_P(SiftTest, DescriptorsAreQuantisedUnitVectors) {
   const cv::Mat image = TexturedImage(320, 240, 300);
   for (const bool root_sift : {false, true}) {
-    SiftExtractionOptions options;
+    SiftExtractionOptions options = Options();
     options.root_sift = root_sift;
     FeatureKeypoints keypoints;
     FeatureDescriptors descriptors;
@@ -117,9 +135,9 @@ TEST(Sift, DescriptorsAreQuantisedUnitVectors) {
   }
 }
 
-TEST(Sift, DeterministicAndKeepsTheStrongest) {
+TEST_P(SiftTest, DeterministicAndKeepsTheStrongest) {
   const cv::Mat image = TexturedImage(400, 300, 500);
-  SiftExtractionOptions options;
+  SiftExtractionOptions options = Options();
   FeatureKeypoints keypoints_a, keypoints_b, keypoints_limited;
   FeatureDescriptors descriptors_a, descriptors_b, descriptors_limited;
   CreateSiftExtractor(options)->Extract(image, &keypoints_a, &descriptors_a);
@@ -145,11 +163,11 @@ TEST(Sift, DeterministicAndKeepsTheStrongest) {
   EXPECT_EQ(descriptors_limited, descriptors_a.topRows(50));
 }
 
-TEST(Sift, LargeImagesAreDownscaledAndKeypointsRescaled) {
+TEST_P(SiftTest, LargeImagesAreDownscaledAndKeypointsRescaled) {
   const cv::Mat image = TexturedImage(800, 600, 1500);
   cv::Mat half;
   cv::resize(image, half, cv::Size(400, 300), 0, 0, cv::INTER_AREA);
-  SiftExtractionOptions options;
+  SiftExtractionOptions options = Options();
   FeatureKeypoints keypoints_half, keypoints_full;
   FeatureDescriptors descriptors_half, descriptors_full;
   CreateSiftExtractor(options)->Extract(half, &keypoints_half, &descriptors_half);
@@ -168,14 +186,15 @@ TEST(Sift, LargeImagesAreDownscaledAndKeypointsRescaled) {
   EXPECT_EQ(descriptors_full, descriptors_half);
 }
 
-// Above max_upsampled_image_size the first octave is at the image's own resolution: the
+// Above max_upsampled_image_size the first octave is at the image's own resolution: OpenCV's
 // detector then sees exactly the half-size image doubled, and finds the same blobs as with
 // the doubled full image except the finest ones.
-TEST(Sift, LargeImagesAreNotUpsampled) {
+TEST(Sift, OpenCvLargeImagesAreNotUpsampled) {
   const cv::Mat image = TexturedImage(800, 600, 1500);
   cv::Mat half;
   cv::resize(image, half, cv::Size(400, 300), 0, 0, cv::INTER_AREA);
   SiftExtractionOptions options;
+  options.implementation = SiftImplementation::kOpenCv;
   options.max_num_features = 100000;
   FeatureKeypoints keypoints_half, keypoints_own, keypoints_doubled;
   FeatureDescriptors descriptors_half, descriptors_own, descriptors_doubled;
@@ -209,8 +228,47 @@ TEST(Sift, LargeImagesAreNotUpsampled) {
   EXPECT_GT(num_found, 0.8 * keypoints_own.size());
 }
 
-TEST(Sift, EmptyAndFeaturelessImages) {
-  const auto extractor = CreateSiftExtractor(SiftExtractionOptions());
+// The native SIFT above max_upsampled_image_size starts at the image's own resolution: no
+// frame finer than that octave's first layer, and most of its frames are the doubled run's.
+TEST(Sift, NativeLargeImagesAreNotUpsampled) {
+  const cv::Mat image = TexturedImage(800, 600, 1500);
+  SiftExtractionOptions options;
+  options.implementation = SiftImplementation::kNative;
+  options.max_num_features = 100000;
+  options.max_upsampled_image_size = 600;
+  FeatureKeypoints keypoints_own, keypoints_doubled;
+  FeatureDescriptors descriptors_own, descriptors_doubled;
+  CreateSiftExtractor(options)->Extract(image, &keypoints_own, &descriptors_own);
+  options.max_upsampled_image_size = 0;
+  CreateSiftExtractor(options)->Extract(image, &keypoints_doubled, &descriptors_doubled);
+  ASSERT_GT(keypoints_own.size(), 50u);
+  EXPECT_GT(keypoints_doubled.size(), keypoints_own.size());
+  const auto finest = [](const FeatureKeypoints& keypoints) {
+    float scale = std::numeric_limits<float>::max();
+    for (const FeatureKeypoint& keypoint : keypoints) {
+      scale = std::min(scale, keypoint.ComputeScale());
+    }
+    return scale;
+  };
+  // Octave 0 starts at sigma 1.6; refinement moves a frame at most half a layer below it.
+  EXPECT_GT(finest(keypoints_own), 1.6 * std::pow(2.0, -0.5 / 3) - 1e-3);
+  EXPECT_LT(finest(keypoints_doubled), 1.4);
+  size_t num_found = 0;
+  for (const FeatureKeypoint& own : keypoints_own) {
+    for (const FeatureKeypoint& doubled : keypoints_doubled) {
+      const double scale_ratio = doubled.ComputeScale() / own.ComputeScale();
+      if (std::hypot(doubled.x - own.x, doubled.y - own.y) < 0.25 * own.ComputeScale() &&
+          scale_ratio > 0.8 && scale_ratio < 1.25) {
+        ++num_found;
+        break;
+      }
+    }
+  }
+  EXPECT_GT(num_found, 0.8 * keypoints_own.size()) << num_found << " of " << keypoints_own.size();
+}
+
+TEST_P(SiftTest, EmptyAndFeaturelessImages) {
+  const auto extractor = CreateSiftExtractor(Options());
   FeatureKeypoints keypoints(3);
   FeatureDescriptors descriptors(3, 128);
   extractor->Extract(cv::Mat(0, 0, CV_8UC1), &keypoints, &descriptors);
@@ -238,16 +296,19 @@ TEST(Sift, OptionsCheck) {
   options = {};
   options.sigma = -1;
   EXPECT_THROW(options.Check(), CheckError);
+  options = {};
+  options.max_num_orientations = 0;
+  EXPECT_THROW(options.Check(), CheckError);
 }
 
 // The figures the paper reports for templeRing with OpenCV's SIFT: 867 keypoints per image on
 // average, 458 putative matches between templeR0001 and templeR0002.
-TEST(Sift, TempleRingFigures) {
+TEST_P(SiftTest, TempleRingFigures) {
   const std::filesystem::path dir = DataRoot() / "templeRing" / "images";
   if (!std::filesystem::is_directory(dir)) GTEST_SKIP() << "no data at " << dir;
   const std::vector<std::filesystem::path> paths = ListImageFiles(dir);
   ASSERT_EQ(paths.size(), 47u);
-  const auto extractor = CreateSiftExtractor(SiftExtractionOptions());
+  const auto extractor = CreateSiftExtractor(Options());
   size_t total = 0;
   FeatureDescriptors descriptors0001, descriptors0002;
   FeatureKeypoints keypoints;
@@ -282,7 +343,7 @@ TEST(Sift, TempleRingFigures) {
   EXPECT_LE(num_default, num_ratio);
 
   // The same with plain (not root) SIFT descriptors, as OpenCV outputs them.
-  SiftExtractionOptions plain_options;
+  SiftExtractionOptions plain_options = Options();
   plain_options.root_sift = false;
   const auto plain_extractor = CreateSiftExtractor(plain_options);
   FeatureDescriptors plain1, plain2;

@@ -1,0 +1,641 @@
+#include "parallax/feature/native_sift.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "parallax/util/check.h"
+
+namespace parallax {
+namespace {
+
+constexpr float kTwoPi = 6.283185307179586f;
+// Extrema are searched up to one sample from an octave's edge, as VLFeat does (OpenCV keeps
+// five away, which costs a coarse octave a wide frame of its image).
+constexpr int kImageBorder = 1;
+constexpr int kSmallestOctaveSide = 8;
+constexpr int kMaxRefinementSteps = 5;  // Moves of an extremum to a neighbouring sample.
+// The fit moves to a neighbouring sample when its extremum is this far off; after the last
+// move it must lie within kMaxFinalOffset of the sample it settled on.
+constexpr float kMoveOffset = 0.6f;
+constexpr float kMaxFinalOffset = 1.5f;
+constexpr int kOrientationBins = 36;
+constexpr float kOrientationWindow = 1.5f;  // Window sigma, in units of the frame's scale.
+constexpr int kOrientationSmoothing = 6;    // Passes of a circular [1 1 1] / 3 box filter.
+constexpr float kOrientationPeakRatio = 0.8f;
+constexpr int kDescriptorGrid = 4;  // Spatial bins per side.
+constexpr int kDescriptorOrientations = 8;
+constexpr int kDescriptorSize = kDescriptorGrid * kDescriptorGrid * kDescriptorOrientations;
+constexpr float kDescriptorMagnification = 3.0f;  // Bin side, in units of the frame's scale.
+constexpr float kDescriptorClamp = 0.2f;
+static_assert(kDescriptorSize == 128);
+
+// One octave of the scale space: S + 3 Gaussian layers.
+struct Octave {
+  int index = 0;  // Pixel size of this octave is 2^index input pixels (-1: doubled image).
+  std::vector<cv::Mat> gaussians;
+};
+
+// Gradient magnitude and angle (radians in [0, 2 pi)) of one Gaussian layer.
+struct Gradient {
+  cv::Mat magnitude, angle;
+};
+
+// The Gaussian scale space of one image, and the buffers it is built in. One per thread,
+// kept between images: a pyramid is tens of megabytes, and fresh pages cost more to fault
+// in than the blurs cost to compute.
+struct ScaleSpace {
+  cv::Mat input, doubled;
+  std::vector<Octave> octaves;
+  // Sized for the first octave; later octaves use their top-left corner.
+  std::vector<cv::Mat> dog_buffers;
+  cv::Mat magnitude_buffer, angle_buffer;
+  cv::Mat dx_rows, dy_rows;  // A band of rows of differences, converted to polar at once.
+};
+
+// The gradient of one Gaussian layer, by central differences (zero on the one-pixel border),
+// in the corners of the shared buffers. Bands of rows keep the differences in cache.
+Gradient LayerGradient(const cv::Mat& image, ScaleSpace* space) {
+  constexpr int kBandRows = 16;
+  const cv::Rect corner(cv::Point(0, 0), image.size());
+  Gradient gradient{space->magnitude_buffer(corner), space->angle_buffer(corner)};
+  space->dx_rows.create(kBandRows, space->magnitude_buffer.cols, CV_32F);
+  space->dy_rows.create(kBandRows, space->magnitude_buffer.cols, CV_32F);
+  for (int band = 0; band < image.rows; band += kBandRows) {
+    const int band_rows = std::min(kBandRows, image.rows - band);
+    for (int i = 0; i < band_rows; ++i) {
+      const int r = band + i;
+      float* gx = space->dx_rows.ptr<float>(i);
+      float* gy = space->dy_rows.ptr<float>(i);
+      if (r == 0 || r + 1 == image.rows) {
+        std::fill(gx, gx + image.cols, 0.0f);
+        std::fill(gy, gy + image.cols, 0.0f);
+        continue;
+      }
+      const float* above = image.ptr<float>(r - 1);
+      const float* row = image.ptr<float>(r);
+      const float* below = image.ptr<float>(r + 1);
+      gx[0] = gy[0] = gx[image.cols - 1] = gy[image.cols - 1] = 0;
+      for (int c = 1; c + 1 < image.cols; ++c) {
+        gx[c] = 0.5f * (row[c + 1] - row[c - 1]);
+        gy[c] = 0.5f * (below[c] - above[c]);
+      }
+    }
+    const cv::Rect band_in_buffer(0, 0, image.cols, band_rows);
+    const cv::Rect band_in_image(0, band, image.cols, band_rows);
+    cv::Mat magnitude = gradient.magnitude(band_in_image), angle = gradient.angle(band_in_image);
+    cv::cartToPolar(space->dx_rows(band_in_buffer), space->dy_rows(band_in_buffer), magnitude,
+                    angle, /*angleInDegrees=*/false);
+  }
+  return gradient;
+}
+
+// Builds the octaves: layer k of every octave has sigma * 2^(k / S) in that octave's pixels,
+// each layer blurred from the one below it; the next octave starts from layer S (twice the
+// first layer's blur) sampled at every other pixel.
+void BuildScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, ScaleSpace* space) {
+  gray.convertTo(space->input, CV_32F, 1.0 / 255.0);
+  const cv::Mat* base = &space->input;
+  // A camera image is taken to carry a blur of half a pixel already (Lowe's assumption).
+  double input_blur = 0.5;
+  int first_octave = 0;
+  if (options.double_first_octave) {
+    cv::resize(space->input, space->doubled, cv::Size(2 * gray.cols, 2 * gray.rows), 0, 0,
+               cv::INTER_LINEAR);
+    base = &space->doubled;
+    input_blur = 1.0;
+    first_octave = -1;
+  }
+  int num_octaves = 0;
+  for (int rows = base->rows, cols = base->cols; std::min(rows, cols) >= kSmallestOctaveSide;
+       rows /= 2, cols /= 2) {
+    ++num_octaves;
+  }
+  const int layers = options.num_octave_layers;
+  space->octaves.resize(num_octaves);
+  if (num_octaves == 0) return;
+
+  std::vector<double> increments(layers + 3, 0.0);
+  for (int k = 1; k < layers + 3; ++k) {
+    const double previous = options.sigma * std::pow(2.0, (k - 1.0) / layers);
+    const double current = options.sigma * std::pow(2.0, static_cast<double>(k) / layers);
+    increments[k] = std::sqrt(current * current - previous * previous);
+  }
+  const double first_blur =
+      std::sqrt(std::max(options.sigma * options.sigma - input_blur * input_blur, 0.01));
+  for (int o = 0; o < num_octaves; ++o) {
+    Octave& octave = space->octaves[o];
+    octave.index = first_octave + o;
+    octave.gaussians.resize(layers + 3);
+    if (o == 0) {
+      cv::GaussianBlur(*base, octave.gaussians[0], cv::Size(), first_blur, first_blur,
+                       cv::BORDER_REPLICATE);
+    } else {
+      const cv::Mat& previous = space->octaves[o - 1].gaussians[layers];
+      cv::resize(previous, octave.gaussians[0], cv::Size(previous.cols / 2, previous.rows / 2), 0,
+                 0, cv::INTER_NEAREST);
+    }
+    for (int k = 1; k < layers + 3; ++k) {
+      cv::GaussianBlur(octave.gaussians[k - 1], octave.gaussians[k], cv::Size(), increments[k],
+                       increments[k], cv::BORDER_REPLICATE);
+    }
+  }
+  space->dog_buffers.resize(layers + 2);
+  for (cv::Mat& buffer : space->dog_buffers) buffer.create(base->size(), CV_32F);
+  space->magnitude_buffer.create(base->size(), CV_32F);
+  space->angle_buffer.create(base->size(), CV_32F);
+}
+
+// The differences of Gaussians of one octave, in the corners of the shared buffers.
+std::vector<cv::Mat> DifferencesOfGaussians(const Octave& octave, ScaleSpace* space) {
+  std::vector<cv::Mat> dogs;
+  const cv::Size size = octave.gaussians[0].size();
+  for (size_t k = 0; k + 1 < octave.gaussians.size(); ++k) {
+    cv::Mat dog = space->dog_buffers[k](cv::Rect(cv::Point(0, 0), size));
+    cv::subtract(octave.gaussians[k + 1], octave.gaussians[k], dog);
+    dogs.push_back(dog);
+  }
+  return dogs;
+}
+
+// An extremum refined to sub-sample precision in (column, row, layer).
+struct Extremum {
+  int layer = 0, row = 0, col = 0;
+  float offset_col = 0, offset_row = 0, offset_layer = 0;
+  float value = 0;  // Interpolated DoG at the refined position.
+};
+
+// Whether the sample is at least as large (positive) or as small (negative) as its 26
+// neighbours in scale and space; its own layer first, where most samples fail.
+bool IsLocalExtremum(const std::vector<cv::Mat>& dogs, int layer, int r, int c) {
+  const float value = dogs[layer].ptr<float>(r)[c];
+  const auto beaten_in = [&](const cv::Mat& dog, bool skip_centre) {
+    for (int rr = r - 1; rr <= r + 1; ++rr) {
+      const float* row = dog.ptr<float>(rr);
+      for (int cc = c - 1; cc <= c + 1; ++cc) {
+        if (skip_centre && rr == r && cc == c) continue;
+        if (value > 0 ? row[cc] > value : row[cc] < value) return true;
+      }
+    }
+    return false;
+  };
+  return !beaten_in(dogs[layer], true) && !beaten_in(dogs[layer - 1], false) &&
+         !beaten_in(dogs[layer + 1], false);
+}
+
+// candidates[c] = 1 where sample (r, c) passes the contrast screen and is an extremum of its
+// row: the cheap tests, in a loop without branches that the compiler vectorises, so that
+// IsLocalExtremum sees a few samples of each row instead of all.
+void ScreenRow(const cv::Mat& dog, int r, float screen, std::vector<uint8_t>* candidates) {
+  const int cols = dog.cols;
+  candidates->assign(cols, 0);
+  const float* row = dog.ptr<float>(r);
+  uint8_t* out = candidates->data();
+  for (int c = 1; c + 1 < cols; ++c) {
+    const float v = row[c], left = row[c - 1], right = row[c + 1];
+    // Bitwise, not logical, operators: no branch, so the loop vectorises.
+    const int maximum =
+        static_cast<int>(v > screen) & static_cast<int>(v >= left) & static_cast<int>(v >= right);
+    const int minimum =
+        static_cast<int>(v < -screen) & static_cast<int>(v <= left) & static_cast<int>(v <= right);
+    out[c] = static_cast<uint8_t>(maximum | minimum);
+  }
+}
+
+// Fits a quadratic to the DoG around the sample and moves to the neighbouring sample while
+// the fitted extremum lies closer to it (Lowe 2004, section 4); then rejects low contrast
+// and edge responses. False when the extremum leaves the octave or does not settle.
+bool RefineExtremum(const std::vector<cv::Mat>& dogs, const NativeSiftOptions& options,
+                    Extremum* extremum) {
+  const int layers = options.num_octave_layers;
+  const int rows = dogs[0].rows, cols = dogs[0].cols;
+  int layer = extremum->layer, r = extremum->row, c = extremum->col;
+  float offset[3] = {0, 0, 0};
+  float gradient[3] = {0, 0, 0};
+  for (int step = 0; step < kMaxRefinementSteps; ++step) {
+    const float* prev = dogs[layer - 1].ptr<float>(r);
+    const float* curr = dogs[layer].ptr<float>(r);
+    const float* next = dogs[layer + 1].ptr<float>(r);
+    const float* up = dogs[layer].ptr<float>(r - 1);
+    const float* down = dogs[layer].ptr<float>(r + 1);
+    const float* prev_up = dogs[layer - 1].ptr<float>(r - 1);
+    const float* prev_down = dogs[layer - 1].ptr<float>(r + 1);
+    const float* next_up = dogs[layer + 1].ptr<float>(r - 1);
+    const float* next_down = dogs[layer + 1].ptr<float>(r + 1);
+    const float v2 = 2.0f * curr[c];
+    gradient[0] = 0.5f * (curr[c + 1] - curr[c - 1]);
+    gradient[1] = 0.5f * (down[c] - up[c]);
+    gradient[2] = 0.5f * (next[c] - prev[c]);
+    const float dxx = curr[c + 1] + curr[c - 1] - v2;
+    const float dyy = down[c] + up[c] - v2;
+    const float dss = next[c] + prev[c] - v2;
+    const float dxy = 0.25f * (down[c + 1] - down[c - 1] - up[c + 1] + up[c - 1]);
+    const float dxs = 0.25f * (next[c + 1] - next[c - 1] - prev[c + 1] + prev[c - 1]);
+    const float dys = 0.25f * (next_down[c] - next_up[c] - prev_down[c] + prev_up[c]);
+    // Solve H offset = -gradient by Cramer's rule (H is 3x3 symmetric).
+    const float c00 = dyy * dss - dys * dys, c01 = dxs * dys - dxy * dss,
+                c02 = dxy * dys - dxs * dyy;
+    const float det = dxx * c00 + dxy * c01 + dxs * c02;
+    if (std::abs(det) < 1e-12f) return false;
+    const float c11 = dxx * dss - dxs * dxs, c12 = dxy * dxs - dxx * dys,
+                c22 = dxx * dyy - dxy * dxy;
+    const float inv = -1.0f / det;
+    offset[0] = inv * (c00 * gradient[0] + c01 * gradient[1] + c02 * gradient[2]);
+    offset[1] = inv * (c01 * gradient[0] + c11 * gradient[1] + c12 * gradient[2]);
+    offset[2] = inv * (c02 * gradient[0] + c12 * gradient[1] + c22 * gradient[2]);
+    const int move_col = offset[0] > kMoveOffset ? 1 : (offset[0] < -kMoveOffset ? -1 : 0);
+    const int move_row = offset[1] > kMoveOffset ? 1 : (offset[1] < -kMoveOffset ? -1 : 0);
+    if (move_col == 0 && move_row == 0) break;
+    if (c + move_col < kImageBorder || c + move_col >= cols - kImageBorder ||
+        r + move_row < kImageBorder || r + move_row >= rows - kImageBorder) {
+      break;
+    }
+    c += move_col;
+    r += move_row;
+  }
+  if (std::abs(offset[0]) >= kMaxFinalOffset || std::abs(offset[1]) >= kMaxFinalOffset ||
+      std::abs(offset[2]) >= kMaxFinalOffset) {
+    return false;
+  }
+  const float layer_position = layer + offset[2];
+  if (layer_position < 0.0f || layer_position > layers + 1.0f) return false;
+
+  const float* curr = dogs[layer].ptr<float>(r);
+  const float value = curr[c] + 0.5f * (gradient[0] * offset[0] + gradient[1] * offset[1] +
+                                        gradient[2] * offset[2]);
+  if (std::abs(value) * layers < options.contrast_threshold) return false;
+
+  // Edge test on the 2x2 spatial Hessian: tr^2 / det < (r + 1)^2 / r.
+  const float* up = dogs[layer].ptr<float>(r - 1);
+  const float* down = dogs[layer].ptr<float>(r + 1);
+  const float dxx = curr[c + 1] + curr[c - 1] - 2.0f * curr[c];
+  const float dyy = down[c] + up[c] - 2.0f * curr[c];
+  const float dxy = 0.25f * (down[c + 1] - down[c - 1] - up[c + 1] + up[c - 1]);
+  const float trace = dxx + dyy, det = dxx * dyy - dxy * dxy;
+  const float edge = static_cast<float>(options.edge_threshold);
+  if (det <= 0 || trace * trace * edge >= (edge + 1) * (edge + 1) * det) return false;
+
+  *extremum = {layer, r, c, offset[0], offset[1], offset[2], value};
+  return true;
+}
+
+// Gaussian weights exp(-d^2 / (2 sigma^2)) for d = i - fraction, i = -radius..radius: a 2D
+// Gaussian window is the product of two of these, so a frame costs 2 (2 radius + 1) exps.
+void GaussianWeights(int radius, float fraction, float sigma, std::vector<float>* weights) {
+  weights->resize(2 * radius + 1);
+  const float scale = -0.5f / (sigma * sigma);
+  for (int i = -radius; i <= radius; ++i) {
+    const float d = static_cast<float>(i) - fraction;
+    (*weights)[i + radius] = std::exp(scale * d * d);
+  }
+}
+
+// Dominant gradient orientations around a frame: a 36-bin histogram of gradient directions
+// weighted by magnitude and a Gaussian window, smoothed, whose peaks within 80 % of the
+// highest become orientations (interpolated by a parabola), strongest first.
+std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y, float octave_scale,
+                                     int max_orientations) {
+  const cv::Mat& magnitude = gradient.magnitude;
+  const cv::Mat& angle = gradient.angle;
+  const float window_sigma = kOrientationWindow * octave_scale;
+  const int radius = std::max(1, static_cast<int>(std::lround(3.0f * window_sigma)));
+  const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
+  std::vector<float> weights_x, weights_y;
+  GaussianWeights(radius, x - xi, window_sigma, &weights_x);
+  GaussianWeights(radius, y - yi, window_sigma, &weights_y);
+
+  std::array<float, kOrientationBins> histogram{};
+  const float radius_sq = radius * radius + 0.5f;
+  for (int dy = -radius; dy <= radius; ++dy) {
+    const int r = yi + dy;
+    if (r < 1 || r >= magnitude.rows - 1) continue;
+    const float* mag_row = magnitude.ptr<float>(r);
+    const float* ang_row = angle.ptr<float>(r);
+    for (int dx = -radius; dx <= radius; ++dx) {
+      const int c = xi + dx;
+      if (c < 1 || c >= magnitude.cols - 1 || dx * dx + dy * dy > radius_sq) continue;
+      const float weight = mag_row[c] * weights_x[dx + radius] * weights_y[dy + radius];
+      const float bin = kOrientationBins * ang_row[c] / kTwoPi - 0.5f;
+      const float lower = std::floor(bin);
+      const float upper_share = bin - lower;
+      const int b = (static_cast<int>(lower) + kOrientationBins) % kOrientationBins;
+      histogram[b] += (1.0f - upper_share) * weight;
+      histogram[(b + 1) % kOrientationBins] += upper_share * weight;
+    }
+  }
+  for (int pass = 0; pass < kOrientationSmoothing; ++pass) {
+    const float first = histogram[0];
+    float previous = histogram[kOrientationBins - 1];
+    for (int b = 0; b < kOrientationBins; ++b) {
+      const float current = histogram[b];
+      const float next = b + 1 < kOrientationBins ? histogram[b + 1] : first;
+      histogram[b] = (previous + current + next) / 3.0f;
+      previous = current;
+    }
+  }
+  const float highest = *std::max_element(histogram.begin(), histogram.end());
+  std::vector<std::pair<float, float>> peaks;  // (height, orientation)
+  for (int b = 0; b < kOrientationBins; ++b) {
+    const float left = histogram[(b + kOrientationBins - 1) % kOrientationBins];
+    const float right = histogram[(b + 1) % kOrientationBins];
+    const float h = histogram[b];
+    if (h <= left || h <= right || h < kOrientationPeakRatio * highest) continue;
+    const float shift = 0.5f * (left - right) / (left - 2.0f * h + right);
+    float orientation = kTwoPi * (b + shift + 0.5f) / kOrientationBins;
+    if (orientation < 0) orientation += kTwoPi;
+    if (orientation >= kTwoPi) orientation -= kTwoPi;
+    peaks.emplace_back(h, orientation);
+  }
+  std::stable_sort(peaks.begin(), peaks.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<float> orientations;
+  for (size_t i = 0; i < peaks.size() && static_cast<int>(i) < max_orientations; ++i) {
+    orientations.push_back(peaks[i].second);
+  }
+  return orientations;
+}
+
+// Lowe's descriptor: gradients in a square of 4 x 4 bins of side 3 x scale, rotated to the
+// frame's orientation, each sample spread over the 2 x 2 x 2 nearest (column, row,
+// orientation) bins, under a Gaussian window of two bins' sigma; then unit-L2, clamped at
+// 0.2 and renormalised against lighting changes.
+void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_scale,
+                     float orientation, float* descriptor) {
+  const cv::Mat& magnitude = gradient.magnitude;
+  const cv::Mat& angle = gradient.angle;
+  const float bin_side = kDescriptorMagnification * octave_scale;
+  const float half_grid = 0.5f * kDescriptorGrid;
+  const int max_radius = static_cast<int>(std::sqrt(
+      static_cast<float>(magnitude.rows * magnitude.rows + magnitude.cols * magnitude.cols)));
+  const int radius = std::min(
+      max_radius,
+      static_cast<int>(std::lround(bin_side * std::sqrt(2.0f) * (kDescriptorGrid + 1) * 0.5f)));
+  const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
+  std::vector<float> weights_x, weights_y;
+  GaussianWeights(radius, x - xi, half_grid * bin_side, &weights_x);
+  GaussianWeights(radius, y - yi, half_grid * bin_side, &weights_y);
+
+  const float cos_t = std::cos(orientation) / bin_side;
+  const float sin_t = std::sin(orientation) / bin_side;
+  constexpr float kBinsPerRadian = kDescriptorOrientations / kTwoPi;
+  // Each sample adds to the 2 x 2 x 2 bins around it. A histogram padded by one bin on every
+  // side (and one orientation past the last) takes those adds without bounds checks; the
+  // padding is dropped and the orientation wrap folded in afterwards.
+  constexpr int kPaddedGrid = kDescriptorGrid + 2;
+  constexpr int kPaddedOrientations = kDescriptorOrientations + 2;
+  // Two copies, for even and odd columns: neighbouring samples mostly hit the same bins, and
+  // alternating copies lets one sample's adds start before the last one's have landed.
+  constexpr int kHistogramSize = kPaddedGrid * kPaddedGrid * kPaddedOrientations;
+  std::array<float, 2 * kHistogramSize> histogram{};
+  thread_local std::vector<float> samples;
+  for (int dy = -radius; dy <= radius; ++dy) {
+    const int r = yi + dy;
+    if (r < 1 || r >= magnitude.rows - 1) continue;
+    const float* mag_row = magnitude.ptr<float>(r);
+    const float* ang_row = angle.ptr<float>(r);
+    const float oy = static_cast<float>(r) - y;
+    const float weight_y = weights_y[dy + radius];
+    // The columns whose samples fall in the rotated window: |u|, |v| < half_grid + 0.5 bins,
+    // an interval per row where the two strips cross.
+    float ox_low = -radius - 1.0f, ox_high = radius + 1.0f;
+    const float half_window = half_grid + 0.5f;
+    const auto intersect_strip = [&](float slope, float intercept) {
+      // |slope * ox + intercept| < half_window
+      if (std::abs(slope) < 1e-6f) {
+        if (std::abs(intercept) >= half_window) ox_high = ox_low - 1.0f;
+        return;
+      }
+      float a = (-half_window - intercept) / slope, b = (half_window - intercept) / slope;
+      if (a > b) std::swap(a, b);
+      ox_low = std::max(ox_low, a);
+      ox_high = std::min(ox_high, b);
+    };
+    intersect_strip(cos_t, sin_t * oy);
+    intersect_strip(-sin_t, cos_t * oy);
+    if (ox_low > ox_high) continue;
+    const int c_begin = std::max({1, xi - radius, static_cast<int>(std::floor(x + ox_low))});
+    const int c_end =
+        std::min({magnitude.cols - 2, xi + radius, static_cast<int>(std::ceil(x + ox_high))});
+    // First the bins and weights of the row's samples, in a loop without branches that
+    // the compiler vectorises; then their adds, which cannot be.
+    const int count = c_end - c_begin + 1;
+    if (count <= 0) continue;
+    samples.resize(4 * static_cast<size_t>(count));
+    float* sample_x = samples.data();
+    float* sample_y = sample_x + count;
+    float* sample_o = sample_y + count;
+    float* sample_weight = sample_o + count;
+    const float* weights_row = weights_x.data() + (c_begin - xi + radius);
+    const float* mag = mag_row + c_begin;
+    const float* ang = ang_row + c_begin;
+    const float ox_begin = static_cast<float>(c_begin) - x;
+    for (int i = 0; i < count; ++i) {
+      const float ox = ox_begin + static_cast<float>(i);
+      // The sample in the frame's axes, in bins, with bin centres at integers 0..3.
+      const float bin_x = cos_t * ox + sin_t * oy + half_grid - 0.5f;
+      const float bin_y = -sin_t * ox + cos_t * oy + half_grid - 0.5f;
+      const bool inside =
+          (bin_x > -1.0f) & (bin_x < kDescriptorGrid) & (bin_y > -1.0f) & (bin_y < kDescriptorGrid);
+      float relative = ang[i] - orientation;
+      relative += relative < 0 ? kTwoPi : 0.0f;
+      float bin_o = relative * kBinsPerRadian;
+      bin_o -= bin_o >= kDescriptorOrientations ? kDescriptorOrientations : 0.0f;
+      sample_x[i] = bin_x;
+      sample_y[i] = bin_y;
+      sample_o[i] = bin_o;
+      sample_weight[i] = inside ? mag[i] * weights_row[i] * weight_y : 0.0f;
+    }
+    for (int i = 0; i < count; ++i) {
+      const float weight = sample_weight[i];
+      if (weight == 0.0f) continue;
+      const float bin_x = sample_x[i], bin_y = sample_y[i], bin_o = sample_o[i];
+      // Both exceed -1, so truncation after adding 1 is the floor.
+      const int x0 = static_cast<int>(bin_x + 1.0f) - 1;
+      const int y0 = static_cast<int>(bin_y + 1.0f) - 1;
+      const int o0 = static_cast<int>(bin_o);
+      const float fx = bin_x - x0, fy = bin_y - y0, fo = bin_o - o0;
+      float* bin = histogram.data() + (i & 1) * kHistogramSize +
+                   ((y0 + 1) * kPaddedGrid + (x0 + 1)) * kPaddedOrientations + o0;
+      const float w1 = weight * fy, w0 = weight - w1;
+      const float w11 = w1 * fx, w10 = w1 - w11, w01 = w0 * fx, w00 = w0 - w01;
+      const float w001 = w00 * fo, w011 = w01 * fo, w101 = w10 * fo, w111 = w11 * fo;
+      bin[0] += w00 - w001;
+      bin[1] += w001;
+      bin[kPaddedOrientations] += w01 - w011;
+      bin[kPaddedOrientations + 1] += w011;
+      bin[kPaddedGrid * kPaddedOrientations] += w10 - w101;
+      bin[kPaddedGrid * kPaddedOrientations + 1] += w101;
+      bin[(kPaddedGrid + 1) * kPaddedOrientations] += w11 - w111;
+      bin[(kPaddedGrid + 1) * kPaddedOrientations + 1] += w111;
+    }
+  }
+  for (int by = 0; by < kDescriptorGrid; ++by) {
+    for (int bx = 0; bx < kDescriptorGrid; ++bx) {
+      const float* cell =
+          histogram.data() + ((by + 1) * kPaddedGrid + (bx + 1)) * kPaddedOrientations;
+      float* out = descriptor + (by * kDescriptorGrid + bx) * kDescriptorOrientations;
+      const float* odd_cell = cell + kHistogramSize;
+      for (int o = 0; o < kDescriptorOrientations; ++o) out[o] = cell[o] + odd_cell[o];
+      out[0] += cell[kDescriptorOrientations] + odd_cell[kDescriptorOrientations];
+    }
+  }
+
+  const auto normalise = [descriptor] {
+    float norm_sq = 0;
+    for (int k = 0; k < kDescriptorSize; ++k) norm_sq += descriptor[k] * descriptor[k];
+    const float inv = norm_sq > 0 ? 1.0f / std::sqrt(norm_sq) : 0.0f;
+    for (int k = 0; k < kDescriptorSize; ++k) descriptor[k] *= inv;
+  };
+  normalise();
+  for (int k = 0; k < kDescriptorSize; ++k) {
+    descriptor[k] = std::min(descriptor[k], kDescriptorClamp);
+  }
+  normalise();
+}
+
+// A frame with where it was found: octave, Gaussian layer, position and scale in the
+// octave's pixels.
+struct Detection {
+  SiftFrame frame;
+  int octave = 0, layer = 0;
+  float x = 0, y = 0, octave_scale = 0;
+};
+
+// Strongest first; ties by position, scale and orientation, so that the order is total and
+// never the scan's.
+bool RanksBefore(const Detection& a, const Detection& b) {
+  const SiftFrame& fa = a.frame;
+  const SiftFrame& fb = b.frame;
+  if (fa.response != fb.response) return fa.response > fb.response;
+  if (fa.y != fb.y) return fa.y < fb.y;
+  if (fa.x != fb.x) return fa.x < fb.x;
+  if (fa.scale != fb.scale) return fa.scale < fb.scale;
+  return fa.orientation < fb.orientation;
+}
+
+}  // namespace
+
+void NativeSiftOptions::Check() const {
+  PARALLAX_CHECK_GT(num_octave_layers, 0);
+  PARALLAX_CHECK_GT(contrast_threshold, 0.0);
+  PARALLAX_CHECK_GT(edge_threshold, 0.0);
+  PARALLAX_CHECK_GT(sigma, 0.0);
+  PARALLAX_CHECK_GT(max_num_orientations, 0);
+  PARALLAX_CHECK_GE(max_num_features, 0);
+}
+
+void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
+                       std::vector<SiftFrame>* frames, std::vector<float>* descriptors) {
+  options.Check();
+  PARALLAX_CHECK(frames != nullptr);
+  PARALLAX_CHECK(descriptors != nullptr);
+  PARALLAX_CHECK_EQ(gray.type(), CV_8UC1);
+  frames->clear();
+  descriptors->clear();
+  if (gray.empty()) return;
+
+  thread_local ScaleSpace space;
+  BuildScaleSpace(gray, options, &space);
+  const int layers = options.num_octave_layers;
+  // Half the final threshold screens samples before the 26-neighbour test, as Lowe does.
+  const float screen = static_cast<float>(0.5 * options.contrast_threshold / layers);
+  // Where the doubled image's pixel 0 lies: centre-aligned upsampling puts doubled pixel X
+  // at input coordinate (X + 0.5) / 2, and every later octave samples every other pixel.
+  const float origin = options.double_first_octave ? 0.25f : 0.5f;
+
+  // 1. Extrema of the DoG in every octave, refined.
+  std::vector<Detection> extrema;
+  std::vector<uint8_t> candidates;
+  for (int o = 0; o < static_cast<int>(space.octaves.size()); ++o) {
+    const Octave& octave = space.octaves[o];
+    const std::vector<cv::Mat> dogs = DifferencesOfGaussians(octave, &space);
+    const float pixel_size = std::ldexp(1.0f, octave.index);
+    const int rows = dogs[0].rows, cols = dogs[0].cols;
+    for (int layer = 1; layer <= layers; ++layer) {
+      for (int r = kImageBorder; r < rows - kImageBorder; ++r) {
+        ScreenRow(dogs[layer], r, screen, &candidates);
+        for (int c = kImageBorder; c < cols - kImageBorder; ++c) {
+          if (!candidates[c] || !IsLocalExtremum(dogs, layer, r, c)) continue;
+          Extremum extremum{layer, r, c};
+          if (!RefineExtremum(dogs, options, &extremum)) continue;
+          Detection& detection = extrema.emplace_back();
+          detection.octave = o;
+          detection.x = extremum.col + extremum.offset_col;
+          detection.y = extremum.row + extremum.offset_row;
+          const float layer_position = extremum.layer + extremum.offset_layer;
+          detection.octave_scale =
+              static_cast<float>(options.sigma * std::pow(2.0, layer_position / layers));
+          // Orientation and descriptor are measured on the Gaussian layer nearest in scale.
+          detection.layer =
+              std::clamp(static_cast<int>(std::lround(layer_position)), 0, layers + 2);
+          detection.frame.x = pixel_size * detection.x + origin;
+          detection.frame.y = pixel_size * detection.y + origin;
+          detection.frame.scale = pixel_size * detection.octave_scale;
+          detection.frame.response = std::abs(extremum.value);
+        }
+      }
+    }
+  }
+
+  // 2. The strongest extrema: every frame of an extremum shares its response, so no frame of
+  // a weaker one can rank among the strongest max_num_features frames.
+  std::sort(extrema.begin(), extrema.end(), RanksBefore);
+  if (options.max_num_features > 0 &&
+      extrema.size() > static_cast<size_t>(options.max_num_features)) {
+    extrema.resize(options.max_num_features);
+  }
+
+  // 3. Orientations and descriptors, one Gaussian layer at a time in scan order, so that one
+  // gradient image is held at a time and frames near each other share its cache lines.
+  std::stable_sort(extrema.begin(), extrema.end(), [](const Detection& a, const Detection& b) {
+    if (a.octave != b.octave) return a.octave < b.octave;
+    if (a.layer != b.layer) return a.layer < b.layer;
+    return a.y < b.y;
+  });
+  std::vector<Detection> detections;
+  std::vector<float> unranked_descriptors;
+  for (size_t begin = 0; begin < extrema.size();) {
+    size_t end = begin;
+    while (end < extrema.size() && extrema[end].octave == extrema[begin].octave &&
+           extrema[end].layer == extrema[begin].layer) {
+      ++end;
+    }
+    const Gradient gradient =
+        LayerGradient(space.octaves[extrema[begin].octave].gaussians[extrema[begin].layer], &space);
+    for (size_t i = begin; i < end; ++i) {
+      const Detection& extremum = extrema[i];
+      for (const float orientation :
+           FrameOrientations(gradient, extremum.x, extremum.y, extremum.octave_scale,
+                             options.max_num_orientations)) {
+        Detection& detection = detections.emplace_back(extremum);
+        detection.frame.orientation = orientation;
+        unranked_descriptors.resize(unranked_descriptors.size() + kDescriptorSize);
+        FrameDescriptor(
+            gradient, extremum.x, extremum.y, extremum.octave_scale, orientation,
+            unranked_descriptors.data() + unranked_descriptors.size() - kDescriptorSize);
+      }
+    }
+    begin = end;
+  }
+
+  // 4. The strongest max_num_features frames, strongest first.
+  std::vector<size_t> order(detections.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&detections](size_t a, size_t b) {
+    return RanksBefore(detections[a], detections[b]);
+  });
+  if (options.max_num_features > 0 &&
+      order.size() > static_cast<size_t>(options.max_num_features)) {
+    order.resize(options.max_num_features);
+  }
+  frames->reserve(order.size());
+  descriptors->resize(order.size() * kDescriptorSize);
+  for (size_t i = 0; i < order.size(); ++i) {
+    frames->push_back(detections[order[i]].frame);
+    std::copy_n(unranked_descriptors.data() + order[i] * kDescriptorSize, kDescriptorSize,
+                descriptors->data() + i * kDescriptorSize);
+  }
+}
+
+}  // namespace parallax
