@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "parallax/util/check.h"
 
@@ -42,17 +43,23 @@ struct Gradient {
   cv::Mat magnitude, angle;
 };
 
-// The Gaussian scale space of one image, and the buffers it is built in. One per thread,
-// kept between images: a pyramid is tens of megabytes, and fresh pages cost more to fault
-// in than the blurs cost to compute.
-struct ScaleSpace {
+}  // namespace
+
+// The Gaussian scale space of one image, and the buffers it is built in (NativeSiftBuffers
+// keeps one between images).
+struct NativeSiftScaleSpace {
   cv::Mat input, doubled;
   std::vector<Octave> octaves;
   // Sized for the first octave; later octaves use their top-left corner.
   std::vector<cv::Mat> dog_buffers;
   cv::Mat magnitude_buffer, angle_buffer;
-  cv::Mat dx_rows, dy_rows;  // A band of rows of differences, converted to polar at once.
+  cv::Mat dx_rows, dy_rows;    // A band of rows of differences, converted to polar at once.
+  std::vector<float> samples;  // One row of a descriptor's samples.
 };
+
+namespace {
+
+using ScaleSpace = NativeSiftScaleSpace;
 
 // The gradient of one Gaussian layer, by central differences (zero on the one-pixel border),
 // in the corners of the shared buffers. Bands of rows keep the differences in cache.
@@ -203,9 +210,10 @@ void ScreenRow(const cv::Mat& dog, int r, float screen, std::vector<uint8_t>* ca
   }
 }
 
-// Fits a quadratic to the DoG around the sample and moves to the neighbouring sample while
-// the fitted extremum lies closer to it (Lowe 2004, section 4); then rejects low contrast
-// and edge responses. False when the extremum leaves the octave or does not settle.
+// Fits a quadratic to the DoG around the sample (Lowe 2004, section 4) and, up to five
+// times, moves to the neighbouring sample in x and y when the fit's extremum lies more than
+// 0.6 samples towards it (VLFeat's rule: the layer stays). False when the final fit is 1.5
+// samples or more away, outside the octave's scales, of low contrast, or on an edge.
 bool RefineExtremum(const std::vector<cv::Mat>& dogs, const NativeSiftOptions& options,
                     Extremum* extremum) {
   const int layers = options.num_octave_layers;
@@ -361,7 +369,8 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
 // orientation) bins, under a Gaussian window of two bins' sigma; then unit-L2, clamped at
 // 0.2 and renormalised against lighting changes.
 void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_scale,
-                     float orientation, float* descriptor) {
+                     float orientation, std::vector<float>* sample_buffer, float* descriptor) {
+  std::vector<float>& samples = *sample_buffer;
   const cv::Mat& magnitude = gradient.magnitude;
   const cv::Mat& angle = gradient.angle;
   const float bin_side = kDescriptorMagnification * octave_scale;
@@ -388,7 +397,6 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
   // alternating copies lets one sample's adds start before the last one's have landed.
   constexpr int kHistogramSize = kPaddedGrid * kPaddedGrid * kPaddedOrientations;
   std::array<float, 2 * kHistogramSize> histogram{};
-  thread_local std::vector<float> samples;
   for (int dy = -radius; dy <= radius; ++dy) {
     const int r = yi + dy;
     if (r < 1 || r >= magnitude.rows - 1) continue;
@@ -525,8 +533,13 @@ void NativeSiftOptions::Check() const {
   PARALLAX_CHECK_GE(max_num_features, 0);
 }
 
+NativeSiftBuffers::NativeSiftBuffers() : space_(std::make_unique<NativeSiftScaleSpace>()) {}
+
+NativeSiftBuffers::~NativeSiftBuffers() = default;
+
 void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
-                       std::vector<SiftFrame>* frames, std::vector<float>* descriptors) {
+                       std::vector<SiftFrame>* frames, std::vector<float>* descriptors,
+                       NativeSiftBuffers* buffers) {
   options.Check();
   PARALLAX_CHECK(frames != nullptr);
   PARALLAX_CHECK(descriptors != nullptr);
@@ -535,7 +548,9 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
   descriptors->clear();
   if (gray.empty()) return;
 
-  thread_local ScaleSpace space;
+  std::optional<NativeSiftBuffers> own_buffers;
+  if (buffers == nullptr) buffers = &own_buffers.emplace();
+  ScaleSpace& space = buffers->ScaleSpace();
   BuildScaleSpace(gray, options, &space);
   const int layers = options.num_octave_layers;
   // Half the final threshold screens samples before the 26-neighbour test, as Lowe does.
@@ -612,7 +627,7 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
         detection.frame.orientation = orientation;
         unranked_descriptors.resize(unranked_descriptors.size() + kDescriptorSize);
         FrameDescriptor(
-            gradient, extremum.x, extremum.y, extremum.octave_scale, orientation,
+            gradient, extremum.x, extremum.y, extremum.octave_scale, orientation, &space.samples,
             unranked_descriptors.data() + unranked_descriptors.size() - kDescriptorSize);
       }
     }

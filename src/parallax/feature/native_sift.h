@@ -1,5 +1,6 @@
 #pragma once
 
+#include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -33,11 +34,32 @@ struct SiftFrame {
   float response = 0;  // |DoG| at the refined extremum.
 };
 
+// The scale space and scratch one extraction works in (about 20 float layers the size of the
+// first octave). Defined in native_sift.cc.
+struct NativeSiftScaleSpace;
+
+// Buffers for ComputeNativeSift: passing the same object to successive calls reuses them,
+// since fresh pages cost more to fault in than the blurs take to compute. One call at a time
+// per object; its memory goes with it.
+class NativeSiftBuffers {
+ public:
+  NativeSiftBuffers();
+  ~NativeSiftBuffers();
+  NativeSiftBuffers(const NativeSiftBuffers&) = delete;
+  NativeSiftBuffers& operator=(const NativeSiftBuffers&) = delete;
+  NativeSiftScaleSpace& ScaleSpace() { return *space_; }
+
+ private:
+  std::unique_ptr<NativeSiftScaleSpace> space_;
+};
+
 // Detects SIFT frames in an 8-bit gray image and computes one descriptor per frame:
 // descriptors->size() == 128 * frames->size(), each a unit-L2 vector clamped at 0.2 and
 // renormalised (Lowe's), in frame order. Frames come strongest first, ties broken by
 // position, scale and orientation, so the order never depends on the scan.
+// Without `buffers`, the call allocates its own and frees them when it returns.
 void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
-                       std::vector<SiftFrame>* frames, std::vector<float>* descriptors);
+                       std::vector<SiftFrame>* frames, std::vector<float>* descriptors,
+                       NativeSiftBuffers* buffers = nullptr);
 
 }  // namespace parallax

@@ -156,7 +156,9 @@ TEST(NativeSift, OrientationsPerExtremumAreCapped) {
       most_at_one_place = std::max(most_at_one_place, same_place);
     }
     EXPECT_LE(most_at_one_place, cap);
-    if (cap > 1) EXPECT_GT(most_at_one_place, 1) << "cap " << cap;
+    if (cap > 1) {
+      EXPECT_GT(most_at_one_place, 1) << "cap " << cap;
+    }
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -182,7 +183,9 @@ class NativeSiftExtractor : public FeatureExtractor {
     sift.max_num_features = options_.max_num_features;
     std::vector<SiftFrame> frames;
     std::vector<float> raw_descriptors;
-    ComputeNativeSift(input.image, sift, &frames, &raw_descriptors);
+    std::unique_ptr<NativeSiftBuffers> buffers = TakeBuffers();
+    ComputeNativeSift(input.image, sift, &frames, &raw_descriptors, buffers.get());
+    ReturnBuffers(std::move(buffers));
 
     std::vector<Candidate> candidates;
     candidates.reserve(frames.size());
@@ -195,7 +198,23 @@ class NativeSiftExtractor : public FeatureExtractor {
   }
 
  private:
+  // A set of buffers per call in progress, kept for the next call and freed with the
+  // extractor: one extractor for a run's images reuses a scale space per thread.
+  std::unique_ptr<NativeSiftBuffers> TakeBuffers() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (idle_buffers_.empty()) return std::make_unique<NativeSiftBuffers>();
+    std::unique_ptr<NativeSiftBuffers> buffers = std::move(idle_buffers_.back());
+    idle_buffers_.pop_back();
+    return buffers;
+  }
+  void ReturnBuffers(std::unique_ptr<NativeSiftBuffers> buffers) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    idle_buffers_.push_back(std::move(buffers));
+  }
+
   SiftExtractionOptions options_;
+  mutable std::mutex mutex_;
+  mutable std::vector<std::unique_ptr<NativeSiftBuffers>> idle_buffers_;
 };
 
 }  // namespace

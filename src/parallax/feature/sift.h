@@ -34,7 +34,10 @@ struct SiftExtractionOptions {
   void Check() const;
 };
 
-// Extraction behind an interface so a native SIFT can replace OpenCV's.
+// Extraction behind an interface, so that the native SIFT and OpenCV's are interchangeable.
+// Extract may be called from several threads at once; an extractor may keep buffers between
+// calls (the native one keeps a scale space per thread at work), so a run uses one for all
+// its images.
 class FeatureExtractor {
  public:
   virtual ~FeatureExtractor() = default;

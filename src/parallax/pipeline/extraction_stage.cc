@@ -98,7 +98,7 @@ bool StoredFeaturesAreCurrent(image_t image_id, const std::filesystem::path& pat
 }
 
 ExtractionResult ExtractImage(const ExtractionJob& job, const ExtractionStageOptions& options,
-                              const FeatureShardIndex* shards) {
+                              const FeatureExtractor& extractor, const FeatureShardIndex* shards) {
   ExtractionResult result;
   try {
     if (std::optional<ShardImageFeatures> stored = shards ? shards->Find(job.path) : std::nullopt) {
@@ -115,8 +115,7 @@ ExtractionResult ExtractImage(const ExtractionJob& job, const ExtractionStageOpt
     const Bitmap bitmap = ReadBitmap(job.path, options.reader);
     result.width = static_cast<size_t>(bitmap.Width());
     result.height = static_cast<size_t>(bitmap.Height());
-    // An extractor per image: cheap to create, and no state is shared between threads.
-    CreateSiftExtractor(options.sift)->Extract(bitmap.gray, &result.keypoints, &result.descriptors);
+    extractor.Extract(bitmap.gray, &result.keypoints, &result.descriptors);
     result.exif = ReadExifHint(job.path);
   } catch (const CheckError&) {
     throw;  // A bug, not a bad file.
@@ -297,12 +296,14 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
   {
     const OpenCvThreadsGuard opencv_threads(
         /*single=*/jobs.size() >= static_cast<size_t>(EffectiveNumThreads(options.num_threads)));
+    // One extractor for the stage: it keeps its buffers between images, and frees them here.
+    const std::unique_ptr<FeatureExtractor> extractor = CreateSiftExtractor(options.sift);
     ParallelFor(0, jobs.size(), options.num_threads, [&](size_t index) {
       // After a signal no new image starts; those finished are written in order up to the
       // first that did not run.
       if (PendingInterruptSignal() != 0) return;
       auto result = std::make_unique<ExtractionResult>(
-          ExtractImage(jobs[index], options, shards ? &*shards : nullptr));
+          ExtractImage(jobs[index], options, *extractor, shards ? &*shards : nullptr));
       std::lock_guard<std::mutex> lock(mutex);
       results[index] = std::move(result);
       while (next_to_write < jobs.size() && results[next_to_write] != nullptr) {
