@@ -364,6 +364,34 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
   return orientations;
 }
 
+// The descriptor bins (x, y, orientation) and weights of `count` samples along a row: sample
+// i is at bin (bin_x + i step_x, bin_y + i step_y), and weighs nothing outside the window. A
+// function of its own, with __restrict, so that the compiler vectorises it (inlined into the
+// row loop it did not).
+void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float step_y,
+                       const float* __restrict angle, float orientation,
+                       const float* __restrict magnitude, const float* __restrict window_x,
+                       float window_y, float* __restrict sample_x, float* __restrict sample_y,
+                       float* __restrict sample_o, float* __restrict sample_weight) {
+  constexpr float kBinsPerRadian = kDescriptorOrientations / kTwoPi;
+  constexpr float kLastOrientationBin = 7.99999952f;  // The float below 8.
+  static_assert(kDescriptorOrientations == 8);
+  for (int i = 0; i < count; ++i) {
+    const float x = bin_x + static_cast<float>(i) * step_x;
+    const float y = bin_y + static_cast<float>(i) * step_y;
+    const bool inside = (x > -1.0f) & (x < kDescriptorGrid) & (y > -1.0f) & (y < kDescriptorGrid);
+    float relative = angle[i] - orientation;
+    relative += relative < 0.0f ? kTwoPi : 0.0f;
+    sample_x[i] = x;
+    sample_y[i] = y;
+    // Rounding can put an angle just under 2 pi at bin 8.0: held just below it, its weight
+    // goes to the padding bin 8, which folds into bin 0 (a wrap would be a second
+    // conditional, which stops the loop vectorising).
+    sample_o[i] = std::min(relative * kBinsPerRadian, kLastOrientationBin);
+    sample_weight[i] = (inside ? window_y : 0.0f) * magnitude[i] * window_x[i];
+  }
+}
+
 // Lowe's descriptor: gradients in a square of 4 x 4 bins of side 3 x scale, rotated to the
 // frame's orientation, each sample spread over the 2 x 2 x 2 nearest (column, row,
 // orientation) bins, under a Gaussian window of two bins' sigma; then unit-L2, clamped at
@@ -387,7 +415,6 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
 
   const float cos_t = std::cos(orientation) / bin_side;
   const float sin_t = std::sin(orientation) / bin_side;
-  constexpr float kBinsPerRadian = kDescriptorOrientations / kTwoPi;
   // Each sample adds to the 2 x 2 x 2 bins around it. A histogram padded by one bin on every
   // side (and one orientation past the last) takes those adds without bounds checks; the
   // padding is dropped and the orientation wrap folded in afterwards.
@@ -434,33 +461,20 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
     float* sample_y = sample_x + count;
     float* sample_o = sample_y + count;
     float* sample_weight = sample_o + count;
-    const float* weights_row = weights_x.data() + (c_begin - xi + radius);
-    const float* mag = mag_row + c_begin;
-    const float* ang = ang_row + c_begin;
-    const float ox_begin = static_cast<float>(c_begin) - x;
-    for (int i = 0; i < count; ++i) {
-      const float ox = ox_begin + static_cast<float>(i);
-      // The sample in the frame's axes, in bins, with bin centres at integers 0..3.
-      const float bin_x = cos_t * ox + sin_t * oy + half_grid - 0.5f;
-      const float bin_y = -sin_t * ox + cos_t * oy + half_grid - 0.5f;
-      const bool inside =
-          (bin_x > -1.0f) & (bin_x < kDescriptorGrid) & (bin_y > -1.0f) & (bin_y < kDescriptorGrid);
-      float relative = ang[i] - orientation;
-      relative += relative < 0 ? kTwoPi : 0.0f;
-      float bin_o = relative * kBinsPerRadian;
-      bin_o -= bin_o >= kDescriptorOrientations ? kDescriptorOrientations : 0.0f;
-      sample_x[i] = bin_x;
-      sample_y[i] = bin_y;
-      sample_o[i] = bin_o;
-      sample_weight[i] = inside ? mag[i] * weights_row[i] * weight_y : 0.0f;
-    }
+    const float bin_x_begin =
+        cos_t * (static_cast<float>(c_begin) - x) + sin_t * oy + half_grid - 0.5f;
+    const float bin_y_begin =
+        -sin_t * (static_cast<float>(c_begin) - x) + cos_t * oy + half_grid - 0.5f;
+    DescriptorSamples(count, bin_x_begin, bin_y_begin, cos_t, -sin_t, ang_row + c_begin,
+                      orientation, mag_row + c_begin, weights_x.data() + (c_begin - xi + radius),
+                      weight_y, sample_x, sample_y, sample_o, sample_weight);
     for (int i = 0; i < count; ++i) {
       const float weight = sample_weight[i];
       if (weight == 0.0f) continue;
       const float bin_x = sample_x[i], bin_y = sample_y[i], bin_o = sample_o[i];
-      // Both exceed -1, so truncation after adding 1 is the floor.
-      const int x0 = static_cast<int>(bin_x + 1.0f) - 1;
-      const int y0 = static_cast<int>(bin_y + 1.0f) - 1;
+      // floor, not truncation of bin + 1: that sum can round up to the next integer.
+      const int x0 = static_cast<int>(std::floor(bin_x));
+      const int y0 = static_cast<int>(std::floor(bin_y));
       const int o0 = static_cast<int>(bin_o);
       const float fx = bin_x - x0, fy = bin_y - y0, fo = bin_o - o0;
       float* bin = histogram.data() + (i & 1) * kHistogramSize +
