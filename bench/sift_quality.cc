@@ -11,10 +11,9 @@
 //
 //   sift_quality IMAGE...      (e.g. $PARALLAX_DATA/templeRing/images/templeR000[1-5].png)
 //
-// Prints one markdown table (the mean over the images, per warp and implementation) and the
-// extraction time. Not a Google Benchmark: it measures quality.
+// Prints one markdown table: the mean over the images, per warp and implementation. Not a
+// Google Benchmark: it measures quality (bench/run.sh times extraction in the pipeline).
 
-#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -70,7 +69,7 @@ bool Inside(const cv::Point2d& p, const cv::Size& size, double margin) {
 
 struct Scores {
   double repeatability = 0, matching_score = 0, precision = 0;
-  double keypoints = 0, seconds = 0;
+  double keypoints = 0;
 };
 
 Scores Compare(const cv::Mat& image, const Warp& warp, const SiftExtractionOptions& options) {
@@ -81,12 +80,9 @@ Scores Compare(const cv::Mat& image, const Warp& warp, const SiftExtractionOptio
   const auto extractor = CreateSiftExtractor(options);
   FeatureKeypoints keypoints1, keypoints2;
   FeatureDescriptors descriptors1, descriptors2;
-  const auto start = std::chrono::steady_clock::now();
   extractor->Extract(image, &keypoints1, &descriptors1);
   extractor->Extract(warped, &keypoints2, &descriptors2);
   Scores scores;
-  scores.seconds =
-      0.5 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   scores.keypoints = 0.5 * (keypoints1.size() + keypoints2.size());
 
   // Frames both images see (away from the warped border); a place with several orientations
@@ -167,13 +163,12 @@ int Run(int argc, char** argv) {
         sum.matching_score += scores.matching_score;
         sum.precision += scores.precision;
         sum.keypoints += scores.keypoints;
-        sum.seconds += scores.seconds;
       }
     }
   }
   const double n = argc - 1;
-  std::cout << "| warp | SIFT | keypoints | repeatability | matching score | precision | "
-               "seconds per image |\n|---|---|---:|---:|---:|---:|---:|\n"
+  std::cout << "| warp | SIFT | keypoints | repeatability | matching score | precision |\n"
+               "|---|---|---:|---:|---:|---:|\n"
             << std::fixed;
   for (size_t w = 0; w < warps.size(); ++w) {
     for (size_t m = 0; m < implementations.size(); ++m) {
@@ -181,7 +176,7 @@ int Run(int argc, char** argv) {
       std::cout << "| " << warps[w].name << " | " << SiftImplementationName(implementations[m])
                 << " | " << std::setprecision(0) << sum.keypoints / n << " | "
                 << std::setprecision(3) << sum.repeatability / n << " | " << sum.matching_score / n
-                << " | " << sum.precision / n << " | " << sum.seconds / n << " |\n";
+                << " | " << sum.precision / n << " |\n";
     }
   }
   return 0;
