@@ -6,6 +6,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "parallax/feature/blob_test_image.h"
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
 
@@ -28,25 +29,8 @@ cv::Mat BlobImage(int width, int height, double cx, double cy, double sigma) {
   return image;
 }
 
-// Blobs of random sizes and contrasts on a mid-grey background.
 cv::Mat TexturedImage(int width, int height, int num_blobs) {
-  cv::Mat image(height, width, CV_32F, cv::Scalar(128.0f));
-  for (int b = 0; b < num_blobs; ++b) {
-    const double cx = RandomUniformReal(0, width), cy = RandomUniformReal(0, height);
-    const double sigma = RandomUniformReal(1.5, 8.0);
-    const double amplitude = RandomUniformReal(-90, 90);
-    for (int y = 0; y < height; ++y) {
-      for (int x = 0; x < width; ++x) {
-        const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-        if (r2 > 16 * sigma * sigma) continue;
-        image.at<float>(y, x) +=
-            static_cast<float>(amplitude * std::exp(-0.5 * r2 / (sigma * sigma)));
-      }
-    }
-  }
-  cv::Mat image8;
-  image.convertTo(image8, CV_8U);
-  return image8;
+  return test::BlobTexturedImage(width, height, num_blobs, /*max_sigma=*/8.0);
 }
 
 const SiftFrame& Strongest(const std::vector<SiftFrame>& frames) {

@@ -94,6 +94,17 @@ void StoreStrongest(std::vector<Candidate>* candidates, const SiftExtractionOpti
   }
 }
 
+// Checks Extract's arguments and empties the outputs; false when the image is empty.
+bool StartExtraction(const cv::Mat& gray, FeatureKeypoints* keypoints,
+                     FeatureDescriptors* descriptors) {
+  PARALLAX_CHECK(keypoints != nullptr);
+  PARALLAX_CHECK(descriptors != nullptr);
+  PARALLAX_CHECK_EQ(gray.type(), CV_8UC1);
+  keypoints->clear();
+  descriptors->resize(0, 128);
+  return !gray.empty();
+}
+
 class OpenCvSiftExtractor : public FeatureExtractor {
  public:
   explicit OpenCvSiftExtractor(const SiftExtractionOptions& options) : options_(options) {
@@ -102,12 +113,7 @@ class OpenCvSiftExtractor : public FeatureExtractor {
 
   void Extract(const cv::Mat& gray, FeatureKeypoints* keypoints,
                FeatureDescriptors* descriptors) const override {
-    PARALLAX_CHECK(keypoints != nullptr);
-    PARALLAX_CHECK(descriptors != nullptr);
-    PARALLAX_CHECK_EQ(gray.type(), CV_8UC1);
-    keypoints->clear();
-    descriptors->resize(0, 128);
-    if (gray.empty()) return;
+    if (!StartExtraction(gray, keypoints, descriptors)) return;
 
     SiftInput input = DownscaleToMaxSize(gray, options_.max_image_size);
     // A half-size image doubled by OpenCV is the original at sigma 1.6: what a Gaussian of
@@ -163,12 +169,7 @@ class NativeSiftExtractor : public FeatureExtractor {
 
   void Extract(const cv::Mat& gray, FeatureKeypoints* keypoints,
                FeatureDescriptors* descriptors) const override {
-    PARALLAX_CHECK(keypoints != nullptr);
-    PARALLAX_CHECK(descriptors != nullptr);
-    PARALLAX_CHECK_EQ(gray.type(), CV_8UC1);
-    keypoints->clear();
-    descriptors->resize(0, 128);
-    if (gray.empty()) return;
+    if (!StartExtraction(gray, keypoints, descriptors)) return;
 
     const SiftInput input = DownscaleToMaxSize(gray, options_.max_image_size);
     NativeSiftOptions sift;

@@ -8,6 +8,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include "parallax/feature/blob_test_image.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/image/image_reader.h"
 #include "parallax/math/random.h"
@@ -19,28 +20,25 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Gray image of random Gaussian blobs of many sizes: blob-like structure at every scale is
-// what the difference-of-Gaussians detector responds to.
 cv::Mat TexturedImage(int width, int height, int num_blobs) {
-  cv::Mat image(height, width, CV_32F, cv::Scalar(128.0f));
-  for (int b = 0; b < num_blobs; ++b) {
-    const double cx = RandomUniformReal(0, width), cy = RandomUniformReal(0, height);
-    const double sigma = RandomUniformReal(1.5, 10.0);
-    const double amplitude = RandomUniformReal(-90, 90);
-    const int radius = static_cast<int>(3 * sigma) + 1;
-    for (int y = std::max(0, static_cast<int>(cy) - radius);
-         y < std::min(height, static_cast<int>(cy) + radius + 1); ++y) {
-      for (int x = std::max(0, static_cast<int>(cx) - radius);
-           x < std::min(width, static_cast<int>(cx) + radius + 1); ++x) {
-        const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-        image.at<float>(y, x) +=
-            static_cast<float>(amplitude * std::exp(-0.5 * r2 / (sigma * sigma)));
+  return test::BlobTexturedImage(width, height, num_blobs);
+}
+
+// How many of `frames` the `other` run found too: within a quarter of the frame's scale, at a
+// scale within 25 %.
+size_t NumFoundIn(const FeatureKeypoints& frames, const FeatureKeypoints& other) {
+  size_t num_found = 0;
+  for (const FeatureKeypoint& frame : frames) {
+    for (const FeatureKeypoint& candidate : other) {
+      const double scale_ratio = candidate.ComputeScale() / frame.ComputeScale();
+      if (std::hypot(candidate.x - frame.x, candidate.y - frame.y) < 0.25 * frame.ComputeScale() &&
+          scale_ratio > 0.8 && scale_ratio < 1.25) {
+        ++num_found;
+        break;
       }
     }
   }
-  cv::Mat image8;
-  image.convertTo(image8, CV_8U);
-  return image8;
+  return num_found;
 }
 
 double AngleDifference(double a, double b) { return std::abs(std::remainder(a - b, 2 * kPi)); }
@@ -212,17 +210,7 @@ TEST(Sift, OpenCvLargeImagesAreNotUpsampled) {
   options.max_upsampled_image_size = 0;
   CreateSiftExtractor(options)->Extract(image, &keypoints_doubled, &descriptors_doubled);
   EXPECT_GT(keypoints_doubled.size(), keypoints_own.size());
-  size_t num_found = 0;
-  for (const FeatureKeypoint& own : keypoints_own) {
-    for (const FeatureKeypoint& doubled : keypoints_doubled) {
-      const double scale_ratio = doubled.ComputeScale() / own.ComputeScale();
-      if (std::hypot(doubled.x - own.x, doubled.y - own.y) < 0.25 * own.ComputeScale() &&
-          scale_ratio > 0.8 && scale_ratio < 1.25) {
-        ++num_found;
-        break;
-      }
-    }
-  }
+  const size_t num_found = NumFoundIn(keypoints_own, keypoints_doubled);
   std::cout << num_found << " of " << keypoints_own.size() << " keypoints also found doubled ("
             << keypoints_doubled.size() << " there)\n";
   EXPECT_GT(num_found, 0.8 * keypoints_own.size());
@@ -253,17 +241,7 @@ TEST(Sift, NativeLargeImagesAreNotUpsampled) {
   // Octave 0 starts at sigma 1.6; refinement moves a frame at most half a layer below it.
   EXPECT_GT(finest(keypoints_own), 1.6 * std::pow(2.0, -0.5 / 3) - 1e-3);
   EXPECT_LT(finest(keypoints_doubled), 1.4);
-  size_t num_found = 0;
-  for (const FeatureKeypoint& own : keypoints_own) {
-    for (const FeatureKeypoint& doubled : keypoints_doubled) {
-      const double scale_ratio = doubled.ComputeScale() / own.ComputeScale();
-      if (std::hypot(doubled.x - own.x, doubled.y - own.y) < 0.25 * own.ComputeScale() &&
-          scale_ratio > 0.8 && scale_ratio < 1.25) {
-        ++num_found;
-        break;
-      }
-    }
-  }
+  const size_t num_found = NumFoundIn(keypoints_own, keypoints_doubled);
   EXPECT_GT(num_found, 0.8 * keypoints_own.size()) << num_found << " of " << keypoints_own.size();
 }
 
