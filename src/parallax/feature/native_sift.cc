@@ -380,7 +380,10 @@ void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float 
     const float x = bin_x + static_cast<float>(i) * step_x;
     const float y = bin_y + static_cast<float>(i) * step_y;
     const bool inside = (x > -1.0f) & (x < kDescriptorGrid) & (y > -1.0f) & (y < kDescriptorGrid);
-    float relative = angle[i] - orientation;
+    // Orientation bins count the gradient's angle from the frame's the other way round
+    // (as with y up): Lowe's layout, which OpenCV and COLMAP store, so that descriptors of
+    // either SIFT in one database compare bin for bin (VLFeat's count the other way).
+    float relative = orientation - angle[i];
     relative += relative < 0.0f ? kTwoPi : 0.0f;
     sample_x[i] = x;
     sample_y[i] = y;

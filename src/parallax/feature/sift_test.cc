@@ -245,6 +245,45 @@ TEST(Sift, NativeLargeImagesAreNotUpsampled) {
   EXPECT_GT(num_found, 0.8 * keypoints_own.size()) << num_found << " of " << keypoints_own.size();
 }
 
+// Both SIFTs store Lowe's descriptor layout, so a database may hold features of either (one
+// made before the native SIFT was the default, say): the same frame found by both has nearly
+// the same descriptor, and it is the nearest of the other's.
+TEST(Sift, NativeAndOpenCvDescriptorsShareOneLayout) {
+  const cv::Mat image = TexturedImage(320, 240, 400);
+  FeatureKeypoints native_keypoints, opencv_keypoints;
+  FeatureDescriptors native_descriptors, opencv_descriptors;
+  SiftExtractionOptions options;
+  options.implementation = SiftImplementation::kNative;
+  CreateSiftExtractor(options)->Extract(image, &native_keypoints, &native_descriptors);
+  options.implementation = SiftImplementation::kOpenCv;
+  CreateSiftExtractor(options)->Extract(image, &opencv_keypoints, &opencv_descriptors);
+  const MatchableDescriptors native = PrepareDescriptors(native_descriptors);
+  const MatchableDescriptors opencv = PrepareDescriptors(opencv_descriptors);
+  int num_counterparts = 0, num_nearest = 0;
+  std::vector<double> similarities;
+  for (size_t i = 0; i < native_keypoints.size(); ++i) {
+    const FeatureKeypoint& k = native_keypoints[i];
+    for (size_t j = 0; j < opencv_keypoints.size(); ++j) {
+      const FeatureKeypoint& o = opencv_keypoints[j];
+      // OpenCV's positions are a quarter pixel off (NativeSift.BlobPositionAndScaleAreExact).
+      if (std::hypot(o.x - k.x - 0.25, o.y - k.y - 0.25) > 0.3 ||
+          std::abs(o.ComputeScale() / k.ComputeScale() - 1.0) > 0.05 ||
+          AngleDifference(o.ComputeOrientation(), k.ComputeOrientation()) > 0.1) {
+        continue;
+      }
+      ++num_counterparts;
+      Eigen::Index nearest = 0;
+      (opencv.values * native.values.row(i).transpose()).maxCoeff(&nearest);
+      similarities.push_back(opencv.values.row(j).dot(native.values.row(i)));
+      if (nearest == static_cast<Eigen::Index>(j)) ++num_nearest;
+      break;
+    }
+  }
+  ASSERT_GT(num_counterparts, 50);
+  EXPECT_GT(Median(similarities), 0.97);
+  EXPECT_GT(num_nearest, 0.9 * num_counterparts) << num_nearest << " of " << num_counterparts;
+}
+
 TEST_P(SiftTest, EmptyAndFeaturelessImages) {
   const auto extractor = CreateSiftExtractor(Options());
   FeatureKeypoints keypoints(3);
