@@ -50,11 +50,11 @@ py::tuple ExtractSift(const py::array& image, const std::string& sift, int max_f
                       int max_image_size, int max_upsampled_size, double sift_contrast,
                       double sift_edge, bool root_sift) {
   SiftExtractionOptions options = ExtractionStageOptions().sift;
-  if (sift != "native" && sift != "opencv") {
+  const std::optional<SiftImplementation> implementation = SiftImplementationFromName(sift);
+  if (!implementation) {
     throw py::value_error("sift must be 'native' or 'opencv', not '" + sift + "'");
   }
-  options.implementation =
-      sift == "opencv" ? SiftImplementation::kOpenCv : SiftImplementation::kNative;
+  options.implementation = *implementation;
   options.max_num_features = max_features;
   options.max_image_size = max_image_size;
   options.max_upsampled_image_size = max_upsampled_size;

@@ -64,8 +64,7 @@ void AddExtractionOptions(CLI::App& app, ExtractionStageOptions* options) {
   app.add_option_function<std::string>(
          "--sift",
          [&sift](const std::string& name) {
-           sift.implementation =
-               name == "opencv" ? SiftImplementation::kOpenCv : SiftImplementation::kNative;
+           sift.implementation = *SiftImplementationFromName(name);
          },
          "SIFT implementation: native (Parallax's own: float descriptors before RootSIFT, "
          "exact positions) or opencv (OpenCV's cv::SIFT)")

@@ -527,19 +527,19 @@ struct Detection {
   float x = 0, y = 0, octave_scale = 0;
 };
 
-// Strongest first; ties by position, scale and orientation, so that the order is total and
-// never the scan's.
 bool RanksBefore(const Detection& a, const Detection& b) {
-  const SiftFrame& fa = a.frame;
-  const SiftFrame& fb = b.frame;
-  if (fa.response != fb.response) return fa.response > fb.response;
-  if (fa.y != fb.y) return fa.y < fb.y;
-  if (fa.x != fb.x) return fa.x < fb.x;
-  if (fa.scale != fb.scale) return fa.scale < fb.scale;
-  return fa.orientation < fb.orientation;
+  return FrameRanksBefore(a.frame, b.frame);
 }
 
 }  // namespace
+
+bool FrameRanksBefore(const SiftFrame& a, const SiftFrame& b) {
+  if (a.response != b.response) return a.response > b.response;
+  if (a.y != b.y) return a.y < b.y;
+  if (a.x != b.x) return a.x < b.x;
+  if (a.scale != b.scale) return a.scale < b.scale;
+  return a.orientation < b.orientation;
+}
 
 void NativeSiftOptions::Check() const {
   PARALLAX_CHECK_GT(num_octave_layers, 0);

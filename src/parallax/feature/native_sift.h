@@ -34,6 +34,10 @@ struct SiftFrame {
   float response = 0;  // |DoG| at the refined extremum.
 };
 
+// The order frames are ranked and cut in: strongest response first; ties by position (y,
+// then x), scale and orientation, so that the order is total and never a scan's.
+bool FrameRanksBefore(const SiftFrame& a, const SiftFrame& b);
+
 // The scale space and scratch one extraction works in (about 20 float layers the size of the
 // first octave). Defined in native_sift.cc.
 struct NativeSiftScaleSpace;
@@ -55,8 +59,7 @@ class NativeSiftBuffers {
 
 // Detects SIFT frames in an 8-bit gray image and computes one descriptor per frame:
 // descriptors->size() == 128 * frames->size(), each a unit-L2 vector clamped at 0.2 and
-// renormalised (Lowe's), in frame order. Frames come strongest first, ties broken by
-// position, scale and orientation, so the order never depends on the scan.
+// renormalised (Lowe's), in frame order. Frames come in FrameRanksBefore's order.
 // Without `buffers`, the call allocates its own and frees them when it returns.
 void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
                        std::vector<SiftFrame>* frames, std::vector<float>* descriptors,

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
-#include <numeric>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -41,7 +40,7 @@ void ConvertDescriptor(const float* raw, bool root_sift, uint8_t* out) {
 
 // A frame before ranking, in the coordinates of the image the extractor was given.
 struct Candidate {
-  float x, y, scale, orientation, response;
+  SiftFrame frame;
   const float* descriptor;  // 128 raw floats, any positive scale.
 };
 
@@ -66,30 +65,30 @@ SiftInput DownscaleToMaxSize(const cv::Mat& gray, int max_image_size) {
   return input;
 }
 
-// Keeps the strongest max_num_features candidates and stores them, strongest first, in the
-// input image's coordinates. The order is total, so it never depends on the detector's.
-void StoreStrongest(std::vector<Candidate>* candidates, const SiftExtractionOptions& options,
-                    double scale_x, double scale_y, FeatureKeypoints* keypoints,
-                    FeatureDescriptors* descriptors) {
+// Keeps the strongest max_num_features candidates, strongest first (the native SIFT's
+// order; its frames come in it already).
+void KeepStrongest(int max_num_features, std::vector<Candidate>* candidates) {
   std::sort(candidates->begin(), candidates->end(), [](const Candidate& a, const Candidate& b) {
-    if (a.response != b.response) return a.response > b.response;
-    if (a.y != b.y) return a.y < b.y;
-    if (a.x != b.x) return a.x < b.x;
-    if (a.scale != b.scale) return a.scale < b.scale;
-    if (a.orientation != b.orientation) return a.orientation < b.orientation;
+    if (FrameRanksBefore(a.frame, b.frame)) return true;
+    if (FrameRanksBefore(b.frame, a.frame)) return false;
     return a.descriptor < b.descriptor;
   });
-  if (candidates->size() > static_cast<size_t>(options.max_num_features)) {
-    candidates->resize(options.max_num_features);
+  if (candidates->size() > static_cast<size_t>(max_num_features)) {
+    candidates->resize(max_num_features);
   }
-  keypoints->reserve(candidates->size());
-  descriptors->resize(static_cast<Eigen::Index>(candidates->size()), 128);
-  for (size_t i = 0; i < candidates->size(); ++i) {
-    const Candidate& candidate = (*candidates)[i];
+}
+
+// Stores the candidates, in their order, in the input image's coordinates.
+void StoreCandidates(const std::vector<Candidate>& candidates, bool root_sift, double scale_x,
+                     double scale_y, FeatureKeypoints* keypoints, FeatureDescriptors* descriptors) {
+  keypoints->reserve(candidates.size());
+  descriptors->resize(static_cast<Eigen::Index>(candidates.size()), 128);
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const SiftFrame& frame = candidates[i].frame;
     keypoints->emplace_back(
-        static_cast<float>(scale_x * candidate.x), static_cast<float>(scale_y * candidate.y),
-        static_cast<float>(0.5 * (scale_x + scale_y) * candidate.scale), candidate.orientation);
-    ConvertDescriptor(candidate.descriptor, options.root_sift,
+        static_cast<float>(scale_x * frame.x), static_cast<float>(scale_y * frame.y),
+        static_cast<float>(0.5 * (scale_x + scale_y) * frame.scale), frame.orientation);
+    ConvertDescriptor(candidates[i].descriptor, root_sift,
                       descriptors->row(static_cast<Eigen::Index>(i)).data());
   }
 }
@@ -150,11 +149,13 @@ class OpenCvSiftExtractor : public FeatureExtractor {
       // OpenCV: pixel centres at integers, size = 2 sigma, angle in degrees measured in image
       // coordinates (y down). COLMAP: pixel centres at +0.5, scale = sigma, radians.
       const double orientation = keypoint.angle < 0 ? 0.0 : keypoint.angle * kDegreesToRadians;
-      candidates.push_back({keypoint.pt.x + 0.5f, keypoint.pt.y + 0.5f, 0.5f * keypoint.size,
-                            static_cast<float>(orientation), keypoint.response,
+      candidates.push_back({{keypoint.pt.x + 0.5f, keypoint.pt.y + 0.5f, 0.5f * keypoint.size,
+                             static_cast<float>(orientation), keypoint.response},
                             cv_descriptors.ptr<float>(static_cast<int>(i))});
     }
-    StoreStrongest(&candidates, options_, input.scale_x, input.scale_y, keypoints, descriptors);
+    KeepStrongest(options_.max_num_features, &candidates);
+    StoreCandidates(candidates, options_.root_sift, input.scale_x, input.scale_y, keypoints,
+                    descriptors);
   }
 
  private:
@@ -188,14 +189,14 @@ class NativeSiftExtractor : public FeatureExtractor {
     ComputeNativeSift(input.image, sift, &frames, &raw_descriptors, buffers.get());
     ReturnBuffers(std::move(buffers));
 
+    // Already the strongest max_num_features, strongest first.
     std::vector<Candidate> candidates;
     candidates.reserve(frames.size());
     for (size_t i = 0; i < frames.size(); ++i) {
-      const SiftFrame& frame = frames[i];
-      candidates.push_back({frame.x, frame.y, frame.scale, frame.orientation, frame.response,
-                            raw_descriptors.data() + 128 * i});
+      candidates.push_back({frames[i], raw_descriptors.data() + 128 * i});
     }
-    StoreStrongest(&candidates, options_, input.scale_x, input.scale_y, keypoints, descriptors);
+    StoreCandidates(candidates, options_.root_sift, input.scale_x, input.scale_y, keypoints,
+                    descriptors);
   }
 
  private:
@@ -244,6 +245,14 @@ std::unique_ptr<FeatureExtractor> CreateSiftExtractor(const SiftExtractionOption
 
 const char* SiftImplementationName(SiftImplementation implementation) {
   return implementation == SiftImplementation::kNative ? "native" : "opencv";
+}
+
+std::optional<SiftImplementation> SiftImplementationFromName(const std::string& name) {
+  for (const SiftImplementation implementation :
+       {SiftImplementation::kNative, SiftImplementation::kOpenCv}) {
+    if (name == SiftImplementationName(implementation)) return implementation;
+  }
+  return std::nullopt;
 }
 
 }  // namespace parallax

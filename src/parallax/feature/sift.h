@@ -2,6 +2,8 @@
 
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <string>
 
 #include "parallax/feature/types.h"
 
@@ -49,7 +51,8 @@ class FeatureExtractor {
 
 std::unique_ptr<FeatureExtractor> CreateSiftExtractor(const SiftExtractionOptions& options);
 
-// "native" or "opencv", as the command line spells them.
+// "native" or "opencv", as the command line spells them, and back (nullopt for other names).
 const char* SiftImplementationName(SiftImplementation implementation);
+std::optional<SiftImplementation> SiftImplementationFromName(const std::string& name);
 
 }  // namespace parallax
