@@ -16,7 +16,7 @@ constexpr float kTwoPi = 6.283185307179586f;
 // five away, which costs a coarse octave a wide frame of its image).
 constexpr int kImageBorder = 1;
 constexpr int kSmallestOctaveSide = 8;
-constexpr int kMaxRefinementSteps = 5;  // Moves of an extremum to a neighbouring sample.
+constexpr int kMaxRefinementFits = 5;  // Samples an extremum's quadratic fit may try.
 // The fit moves to a neighbouring sample when its extremum is this far off; after the last
 // move it must lie within kMaxFinalOffset of the sample it settled on.
 constexpr float kMoveOffset = 0.6f;
@@ -210,51 +210,69 @@ void ScreenRow(const cv::Mat& dog, int r, float screen, std::vector<uint8_t>* ca
   }
 }
 
-// Fits a quadratic to the DoG around the sample (Lowe 2004, section 4) and, up to five
-// times, moves to the neighbouring sample in x and y when the fit's extremum lies more than
-// 0.6 samples towards it (VLFeat's rule: the layer stays). False when the final fit is 1.5
-// samples or more away, outside the octave's scales, of low contrast, or on an edge.
+// First and second derivatives of the DoG at a sample, by central differences in (column,
+// row, layer).
+struct DogDerivatives {
+  float value = 0;
+  float gradient[3] = {0, 0, 0};
+  float dxx = 0, dyy = 0, dss = 0, dxy = 0, dxs = 0, dys = 0;
+};
+
+DogDerivatives DerivativesAt(const std::vector<cv::Mat>& dogs, int layer, int r, int c) {
+  const float* prev = dogs[layer - 1].ptr<float>(r);
+  const float* curr = dogs[layer].ptr<float>(r);
+  const float* next = dogs[layer + 1].ptr<float>(r);
+  const float* up = dogs[layer].ptr<float>(r - 1);
+  const float* down = dogs[layer].ptr<float>(r + 1);
+  const float* prev_up = dogs[layer - 1].ptr<float>(r - 1);
+  const float* prev_down = dogs[layer - 1].ptr<float>(r + 1);
+  const float* next_up = dogs[layer + 1].ptr<float>(r - 1);
+  const float* next_down = dogs[layer + 1].ptr<float>(r + 1);
+  DogDerivatives d;
+  d.value = curr[c];
+  const float v2 = 2.0f * curr[c];
+  d.gradient[0] = 0.5f * (curr[c + 1] - curr[c - 1]);
+  d.gradient[1] = 0.5f * (down[c] - up[c]);
+  d.gradient[2] = 0.5f * (next[c] - prev[c]);
+  d.dxx = curr[c + 1] + curr[c - 1] - v2;
+  d.dyy = down[c] + up[c] - v2;
+  d.dss = next[c] + prev[c] - v2;
+  d.dxy = 0.25f * (down[c + 1] - down[c - 1] - up[c + 1] + up[c - 1]);
+  d.dxs = 0.25f * (next[c + 1] - next[c - 1] - prev[c + 1] + prev[c - 1]);
+  d.dys = 0.25f * (next_down[c] - next_up[c] - prev_down[c] + prev_up[c]);
+  return d;
+}
+
+// Fits a quadratic to the DoG around the sample (Lowe 2004, section 4) and moves to the
+// neighbouring sample in x and y when the fit's extremum lies more than 0.6 samples towards
+// it (VLFeat's rule: the layer stays), fitting up to five samples; the last fit is always
+// at the sample it ends on. False when that fit is 1.5 samples or more away, outside the
+// octave's scales, of low contrast, or on an edge.
 bool RefineExtremum(const std::vector<cv::Mat>& dogs, const NativeSiftOptions& options,
                     Extremum* extremum) {
   const int layers = options.num_octave_layers;
   const int rows = dogs[0].rows, cols = dogs[0].cols;
-  int layer = extremum->layer, r = extremum->row, c = extremum->col;
+  const int layer = extremum->layer;
+  int r = extremum->row, c = extremum->col;
+  DogDerivatives d;
   float offset[3] = {0, 0, 0};
-  float gradient[3] = {0, 0, 0};
-  for (int step = 0; step < kMaxRefinementSteps; ++step) {
-    const float* prev = dogs[layer - 1].ptr<float>(r);
-    const float* curr = dogs[layer].ptr<float>(r);
-    const float* next = dogs[layer + 1].ptr<float>(r);
-    const float* up = dogs[layer].ptr<float>(r - 1);
-    const float* down = dogs[layer].ptr<float>(r + 1);
-    const float* prev_up = dogs[layer - 1].ptr<float>(r - 1);
-    const float* prev_down = dogs[layer - 1].ptr<float>(r + 1);
-    const float* next_up = dogs[layer + 1].ptr<float>(r - 1);
-    const float* next_down = dogs[layer + 1].ptr<float>(r + 1);
-    const float v2 = 2.0f * curr[c];
-    gradient[0] = 0.5f * (curr[c + 1] - curr[c - 1]);
-    gradient[1] = 0.5f * (down[c] - up[c]);
-    gradient[2] = 0.5f * (next[c] - prev[c]);
-    const float dxx = curr[c + 1] + curr[c - 1] - v2;
-    const float dyy = down[c] + up[c] - v2;
-    const float dss = next[c] + prev[c] - v2;
-    const float dxy = 0.25f * (down[c + 1] - down[c - 1] - up[c + 1] + up[c - 1]);
-    const float dxs = 0.25f * (next[c + 1] - next[c - 1] - prev[c + 1] + prev[c - 1]);
-    const float dys = 0.25f * (next_down[c] - next_up[c] - prev_down[c] + prev_up[c]);
+  for (int fit = 1;; ++fit) {
+    d = DerivativesAt(dogs, layer, r, c);
     // Solve H offset = -gradient by Cramer's rule (H is 3x3 symmetric).
-    const float c00 = dyy * dss - dys * dys, c01 = dxs * dys - dxy * dss,
-                c02 = dxy * dys - dxs * dyy;
-    const float det = dxx * c00 + dxy * c01 + dxs * c02;
+    const float c00 = d.dyy * d.dss - d.dys * d.dys, c01 = d.dxs * d.dys - d.dxy * d.dss,
+                c02 = d.dxy * d.dys - d.dxs * d.dyy;
+    const float det = d.dxx * c00 + d.dxy * c01 + d.dxs * c02;
     if (std::abs(det) < 1e-12f) return false;
-    const float c11 = dxx * dss - dxs * dxs, c12 = dxy * dxs - dxx * dys,
-                c22 = dxx * dyy - dxy * dxy;
+    const float c11 = d.dxx * d.dss - d.dxs * d.dxs, c12 = d.dxy * d.dxs - d.dxx * d.dys,
+                c22 = d.dxx * d.dyy - d.dxy * d.dxy;
     const float inv = -1.0f / det;
-    offset[0] = inv * (c00 * gradient[0] + c01 * gradient[1] + c02 * gradient[2]);
-    offset[1] = inv * (c01 * gradient[0] + c11 * gradient[1] + c12 * gradient[2]);
-    offset[2] = inv * (c02 * gradient[0] + c12 * gradient[1] + c22 * gradient[2]);
+    const float* g = d.gradient;
+    offset[0] = inv * (c00 * g[0] + c01 * g[1] + c02 * g[2]);
+    offset[1] = inv * (c01 * g[0] + c11 * g[1] + c12 * g[2]);
+    offset[2] = inv * (c02 * g[0] + c12 * g[1] + c22 * g[2]);
     const int move_col = offset[0] > kMoveOffset ? 1 : (offset[0] < -kMoveOffset ? -1 : 0);
     const int move_row = offset[1] > kMoveOffset ? 1 : (offset[1] < -kMoveOffset ? -1 : 0);
-    if (move_col == 0 && move_row == 0) break;
+    if ((move_col == 0 && move_row == 0) || fit == kMaxRefinementFits) break;
     if (c + move_col < kImageBorder || c + move_col >= cols - kImageBorder ||
         r + move_row < kImageBorder || r + move_row >= rows - kImageBorder) {
       break;
@@ -269,18 +287,12 @@ bool RefineExtremum(const std::vector<cv::Mat>& dogs, const NativeSiftOptions& o
   const float layer_position = layer + offset[2];
   if (layer_position < 0.0f || layer_position > layers + 1.0f) return false;
 
-  const float* curr = dogs[layer].ptr<float>(r);
-  const float value = curr[c] + 0.5f * (gradient[0] * offset[0] + gradient[1] * offset[1] +
-                                        gradient[2] * offset[2]);
+  const float value = d.value + 0.5f * (d.gradient[0] * offset[0] + d.gradient[1] * offset[1] +
+                                        d.gradient[2] * offset[2]);
   if (std::abs(value) * layers < options.contrast_threshold) return false;
 
   // Edge test on the 2x2 spatial Hessian: tr^2 / det < (r + 1)^2 / r.
-  const float* up = dogs[layer].ptr<float>(r - 1);
-  const float* down = dogs[layer].ptr<float>(r + 1);
-  const float dxx = curr[c + 1] + curr[c - 1] - 2.0f * curr[c];
-  const float dyy = down[c] + up[c] - 2.0f * curr[c];
-  const float dxy = 0.25f * (down[c + 1] - down[c - 1] - up[c + 1] + up[c - 1]);
-  const float trace = dxx + dyy, det = dxx * dyy - dxy * dxy;
+  const float trace = d.dxx + d.dyy, det = d.dxx * d.dyy - d.dxy * d.dxy;
   const float edge = static_cast<float>(options.edge_threshold);
   if (det <= 0 || trace * trace * edge >= (edge + 1) * (edge + 1) * det) return false;
 
