@@ -26,31 +26,37 @@ FeatureShardIndex::FeatureShardIndex(const std::vector<std::filesystem::path>& s
 
 FeatureShardIndex::~FeatureShardIndex() = default;
 
-bool FeatureShardIndex::Holds(const std::filesystem::path& path) const {
+const FeatureShardIndex::Entry* FeatureShardIndex::CurrentEntry(
+    const std::filesystem::path& path) const {
   const auto entry = entries_.find(path.filename().string());
-  if (entry == entries_.end()) return false;
+  if (entry == entries_.end()) return nullptr;
   std::error_code error;
   const uint64_t size = static_cast<uint64_t>(std::filesystem::file_size(path, error));
-  if (error || size != entry->second.fingerprint.size) return false;
+  if (error || size != entry->second.fingerprint.size) return nullptr;
   const auto mtime = std::filesystem::last_write_time(path, error);
   const int64_t mtime_ns =
       std::chrono::duration_cast<std::chrono::nanoseconds>(mtime.time_since_epoch()).count();
-  return !error && mtime_ns == entry->second.fingerprint.mtime_ns;
+  if (error || mtime_ns != entry->second.fingerprint.mtime_ns) return nullptr;
+  return &entry->second;
+}
+
+bool FeatureShardIndex::Holds(const std::filesystem::path& path) const {
+  return CurrentEntry(path) != nullptr;
 }
 
 std::optional<ShardImageFeatures> FeatureShardIndex::Find(const std::filesystem::path& path) const {
-  if (!Holds(path)) return std::nullopt;
-  const auto entry = entries_.find(path.filename().string());
+  const Entry* entry = CurrentEntry(path);
+  if (entry == nullptr) return std::nullopt;
   const std::lock_guard<std::mutex> lock(mutex_);
-  const Database& shard = *shards_[entry->second.shard];
-  const image_t image_id = entry->second.image_id;
+  const Database& shard = *shards_[entry->shard];
+  const image_t image_id = entry->image_id;
   ShardImageFeatures features;
   const Camera camera = shard.ReadCamera(shard.ReadImage(image_id).camera_id);
   features.width = camera.width;
   features.height = camera.height;
   features.keypoints = shard.ReadKeypoints(image_id);
   features.descriptors = shard.ReadDescriptors(image_id);
-  features.fingerprint = entry->second.fingerprint;
+  features.fingerprint = entry->fingerprint;
   return features;
 }
 

@@ -43,6 +43,10 @@ class FeatureShardIndex {
     image_t image_id = kInvalidImageId;
     ImageFileFingerprint fingerprint;
   };
+  // The entry for the file at `path` when its size and modification time are the stored
+  // ones; null otherwise.
+  const Entry* CurrentEntry(const std::filesystem::path& path) const;
+
   std::vector<std::unique_ptr<Database>> shards_;
   std::map<std::string, Entry> entries_;
   mutable std::mutex mutex_;  // SQLite connections are used by one thread at a time.
