@@ -1,17 +1,19 @@
 // Descriptor matching throughput: Parallax's blocked matrix-product matcher against OpenCV's
 // brute-force matcher (cv::BFMatcher(NORM_L2).knnMatch, k = 2, plus the same ratio test), on
-// the same unit-norm float descriptors.
+// the same descriptors (Parallax's integer dot products of the stored bytes, OpenCV's float
+// distances of the unit rows).
 //
 //   build-X/bench/feature_matching_bench [--benchmark_filter=...]
 //
 // Data sets: real SIFT descriptors of templeRing (templeR0001 vs templeR0002, about 800 each;
 // and 8 images stacked against 8 others, about 7000 each, the size of a large photo's
-// feature set). Random non-negative unit descriptors of the same sizes stand in when the data
-// is missing. Before the timings, the program prints how often both matchers agree on the
-// nearest neighbour.
+// feature set). Random non-negative unit descriptors, quantised as SIFT's are, of the same sizes
+// stand in when the data is missing. Before the timings, the program prints how often both matchers
+// agree on the nearest neighbour.
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -38,23 +40,26 @@ struct DescriptorPair {
   std::string name;
   MatchableDescriptors descriptors1;
   MatchableDescriptors descriptors2;
-  cv::Mat mat1, mat2;  // Views of the same floats for OpenCV.
+  UnitDescriptorRows unit1, unit2;  // The same descriptors as unit floats, for OpenCV.
+  cv::Mat mat1, mat2;               // Views of unit1 and unit2.
 };
 
-MatchableDescriptors RandomDescriptors(int num) {
-  MatchableDescriptors descriptors;
-  descriptors.values.resize(num, 128);
+// Non-negative unit vectors quantised as SIFT descriptors are stored (x 512, at most 255).
+FeatureDescriptors RandomDescriptors(int num) {
+  FeatureDescriptors descriptors(num, 128);
   for (int i = 0; i < num; ++i) {
+    Eigen::VectorXf values(128);
+    for (int k = 0; k < 128; ++k) values[k] = static_cast<float>(std::abs(RandomGaussian(0, 1)));
+    values.normalize();
     for (int k = 0; k < 128; ++k) {
-      descriptors.values(i, k) = static_cast<float>(std::abs(RandomGaussian(0, 1)));
+      descriptors(i, k) = static_cast<uint8_t>(std::min(255.0f, std::round(512.0f * values[k])));
     }
-    descriptors.values.row(i).normalize();
   }
   return descriptors;
 }
 
 // SIFT descriptors of the templeRing images with the given 1-based numbers, stacked.
-std::optional<MatchableDescriptors> TempleDescriptors(const std::vector<int>& numbers) {
+std::optional<FeatureDescriptors> TempleDescriptors(const std::vector<int>& numbers) {
   const std::filesystem::path dir = DataRoot() / "templeRing" / "images";
   if (!std::filesystem::is_directory(dir)) return std::nullopt;
   const auto extractor = CreateSiftExtractor(SiftExtractionOptions());
@@ -75,7 +80,7 @@ std::optional<MatchableDescriptors> TempleDescriptors(const std::vector<int>& nu
     stacked.middleRows(row, part.rows()) = part;
     row += part.rows();
   }
-  return PrepareDescriptors(stacked);
+  return stacked;
 }
 
 DescriptorPair MakePair(const std::string& name, const std::vector<int>& numbers1,
@@ -83,15 +88,16 @@ DescriptorPair MakePair(const std::string& name, const std::vector<int>& numbers
   DescriptorPair pair;
   auto descriptors1 = TempleDescriptors(numbers1);
   auto descriptors2 = TempleDescriptors(numbers2);
-  if (descriptors1 && descriptors2) {
-    pair.name = name;
-    pair.descriptors1 = std::move(*descriptors1);
-    pair.descriptors2 = std::move(*descriptors2);
-  } else {
-    pair.name = name + " (random: no templeRing data)";
-    pair.descriptors1 = RandomDescriptors(random_size);
-    pair.descriptors2 = RandomDescriptors(random_size);
+  pair.name = name;
+  if (!descriptors1 || !descriptors2) {
+    pair.name += " (random: no templeRing data)";
+    descriptors1 = RandomDescriptors(random_size);
+    descriptors2 = RandomDescriptors(random_size);
   }
+  pair.descriptors1 = PrepareDescriptors(*descriptors1);
+  pair.descriptors2 = PrepareDescriptors(*descriptors2);
+  pair.unit1 = ToUnitRows(*descriptors1);
+  pair.unit2 = ToUnitRows(*descriptors2);
   return pair;
 }
 
@@ -105,10 +111,8 @@ const DescriptorPair& Pair(int which) {
     // The OpenCV views are made once the pairs no longer move (copying a pair would leave
     // them pointing at the old buffers).
     for (DescriptorPair& pair : result) {
-      auto& values1 = pair.descriptors1.values;
-      auto& values2 = pair.descriptors2.values;
-      pair.mat1 = cv::Mat(static_cast<int>(values1.rows()), 128, CV_32F, values1.data());
-      pair.mat2 = cv::Mat(static_cast<int>(values2.rows()), 128, CV_32F, values2.data());
+      pair.mat1 = cv::Mat(static_cast<int>(pair.unit1.rows()), 128, CV_32F, pair.unit1.data());
+      pair.mat2 = cv::Mat(static_cast<int>(pair.unit2.rows()), 128, CV_32F, pair.unit2.data());
     }
     return result;
   }();
@@ -142,8 +146,7 @@ double ProcessCpuSeconds() {
 void SetCounters(benchmark::State& state, const DescriptorPair& pair, double total_seconds,
                  double total_cpu_seconds, size_t num_matches) {
   const double iterations = static_cast<double>(state.iterations());
-  const double flops =
-      2.0 * pair.descriptors1.values.rows() * pair.descriptors2.values.rows() * 128;
+  const double flops = 2.0 * pair.descriptors1.NumRows() * pair.descriptors2.NumRows() * 128;
   state.counters["ms_per_pair"] = 1e3 * total_seconds / iterations;
   state.counters["cpu_ms_per_pair"] = 1e3 * total_cpu_seconds / iterations;
   state.counters["GFLOP/s"] = flops * iterations / total_seconds * 1e-9;
@@ -206,26 +209,26 @@ BENCHMARK(BM_OpenCvKnnMatch)
     ->Unit(benchmark::kMillisecond);
 
 // The similarity kernel alone on the matcher's largest tile: 256 descriptors of image 2
-// against a block of 256 of image 1, 128 floats each (2 x 256 x 256 x 128 flops per call).
-// Arg: kernel (0 scalar, 1 AVX2, 2 AVX-512); skipped where the CPU lacks it.
+// against a block of 256 of image 1, 128 bytes each (2 x 256 x 256 x 128 operations per call).
+// Arg: kernel (0 scalar, 1 AVX2, 2 AVX-512 VNNI); skipped where the CPU lacks it.
 void BM_SimilarityKernel(benchmark::State& state) {
   const auto kernel = static_cast<SimilarityKernel>(state.range(0));
   if (!SimilarityKernelAvailable(kernel)) {
     state.SkipWithError("this CPU does not run the kernel");
     return;
   }
-  constexpr int kNum = 256, kDim = 128;
-  std::vector<float> a(kNum * kDim), b(kNum * kDim), out(static_cast<size_t>(kNum) * kNum);
-  for (float& value : a) value = RandomUniformReal(0.0f, 0.2f);
-  for (float& value : b) value = RandomUniformReal(0.0f, 0.2f);
-  std::vector<float> a_packed;
-  const int padded_a = PackSimilarityColumns(a.data(), kNum, kDim, &a_packed);
+  constexpr int kNum = 256;
+  const MatchableDescriptors a = PrepareDescriptors(RandomDescriptors(kNum));
+  const MatchableDescriptors b = PrepareDescriptors(RandomDescriptors(kNum));
+  std::vector<float> out(static_cast<size_t>(kNum) * kNum);
+  PackedSimilarityColumns a_packed;
+  PackSimilarityColumns(a.bytes.data(), a.scales.data(), kNum, 128, kernel, &a_packed);
   for (auto _ : state) {
-    ComputeSimilarities(a_packed.data(), padded_a, b.data(), kNum, kDim, out.data(), kernel);
+    ComputeSimilarities(a_packed, b.bytes.data(), b.scales.data(), kNum, out.data());
     benchmark::DoNotOptimize(out.data());
   }
-  state.counters["GFLOP/s"] = benchmark::Counter(
-      2.0 * kNum * kNum * kDim * state.iterations() / 1e9, benchmark::Counter::kIsRate);
+  state.counters["GFLOP/s"] = benchmark::Counter(2.0 * kNum * kNum * 128 * state.iterations() / 1e9,
+                                                 benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_SimilarityKernel)->ArgName("kernel")->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
 
@@ -235,7 +238,7 @@ BENCHMARK(BM_SimilarityKernel)->ArgName("kernel")->DenseRange(0, 2)->Unit(benchm
 // best distances are equal too.
 void PrintAgreement(int which) {
   const DescriptorPair& pair = Pair(which);
-  const int num_queries = static_cast<int>(pair.descriptors1.values.rows());
+  const int num_queries = pair.descriptors1.NumRows();
   std::vector<std::vector<cv::DMatch>> knn;
   const FeatureMatches opencv_matches = OpenCvRatioMatch(pair, &knn);
 
@@ -274,9 +277,9 @@ void PrintAgreement(int which) {
   std::printf(
       "%s: %d x %d descriptors; nearest neighbour agrees for %d of %d queries (%.3f %%); "
       "ratio-test matches: Parallax %zu, OpenCV %zu, common %zu\n",
-      pair.name.c_str(), num_queries, static_cast<int>(pair.descriptors2.values.rows()),
-      num_agreeing, num_queries, 100.0 * num_agreeing / num_queries, parallax_matches.size(),
-      opencv_matches.size(), num_common);
+      pair.name.c_str(), num_queries, pair.descriptors2.NumRows(), num_agreeing, num_queries,
+      100.0 * num_agreeing / num_queries, parallax_matches.size(), opencv_matches.size(),
+      num_common);
   std::fflush(stdout);
 }
 

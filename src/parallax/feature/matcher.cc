@@ -15,8 +15,6 @@
 namespace parallax {
 namespace {
 
-using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
 constexpr float kMinusInfinity = -std::numeric_limits<float>::infinity();
 
 // Tiles of the similarity matrix: one task owns up to kMaxRowBlock descriptors of image 1 and
@@ -123,25 +121,42 @@ void FeatureMatchingOptions::Check() const {
 
 MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors) {
   MatchableDescriptors matchable;
-  matchable.values = descriptors.cast<float>();
-  for (Eigen::Index row = 0; row < matchable.values.rows(); ++row) {
-    const float norm = matchable.values.row(row).norm();
-    // An all-zero row stays zero: distance sqrt(2) to everything, so it never matches.
-    if (norm > 0.0f) matchable.values.row(row) /= norm;
+  matchable.bytes = descriptors;
+  matchable.scales.resize(static_cast<size_t>(descriptors.rows()));
+  for (Eigen::Index row = 0; row < descriptors.rows(); ++row) {
+    // The integer sum of squares is exact, and so is its conversion (below 2^24 for 128 bytes).
+    int32_t sum_of_squares = 0;
+    for (Eigen::Index k = 0; k < descriptors.cols(); ++k) {
+      sum_of_squares += int32_t{descriptors(row, k)} * descriptors(row, k);
+    }
+    // An all-zero row gets scale 0: similarity 0, distance sqrt(2) to everything, never matched.
+    matchable.scales[row] =
+        sum_of_squares > 0 ? 1.0f / std::sqrt(static_cast<float>(sum_of_squares)) : 0.0f;
   }
   return matchable;
+}
+
+UnitDescriptorRows ToUnitRows(const FeatureDescriptors& descriptors) {
+  UnitDescriptorRows values = descriptors.cast<float>();
+  for (Eigen::Index row = 0; row < values.rows(); ++row) {
+    const float norm = values.row(row).norm();
+    if (norm > 0.0f) values.row(row) /= norm;
+  }
+  return values;
 }
 
 FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
                                 const MatchableDescriptors& descriptors2,
                                 const FeatureMatchingOptions& options) {
   options.Check();
-  const RowMatrixXf& values1 = descriptors1.values;
-  const RowMatrixXf& values2 = descriptors2.values;
-  const int num1 = static_cast<int>(values1.rows());
-  const int num2 = static_cast<int>(values2.rows());
+  const FeatureDescriptors& bytes1 = descriptors1.bytes;
+  const FeatureDescriptors& bytes2 = descriptors2.bytes;
+  const int num1 = descriptors1.NumRows();
+  const int num2 = descriptors2.NumRows();
+  PARALLAX_CHECK_EQ(descriptors1.scales.size(), static_cast<size_t>(num1));
+  PARALLAX_CHECK_EQ(descriptors2.scales.size(), static_cast<size_t>(num2));
   if (num1 == 0 || num2 == 0) return {};
-  PARALLAX_CHECK_EQ(values1.cols(), values2.cols());
+  PARALLAX_CHECK_EQ(bytes1.cols(), bytes2.cols());
 
   // Enough row blocks to keep every thread busy, but not so small that the product is
   // dominated by packing the image-2 chunks.
@@ -165,18 +180,20 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
     col_best_index.assign(static_cast<size_t>(num_row_blocks) * num2, -1);
   }
 
-  const int dim = static_cast<int>(values1.cols());
+  const int dim = static_cast<int>(bytes1.cols());
+  const SimilarityKernel kernel = BestSimilarityKernel();
   ParallelFor(0, num_row_blocks, num_threads, [&](size_t block) {
     const int r0 = static_cast<int>(block) * row_block;
     const int num_rows1 = std::min(row_block, num1 - r0);
     // The block's descriptors in the kernel's layout, packed once for all of image 2.
-    std::vector<float> block1_packed;
-    const int stride =
-        PackSimilarityColumns(values1.row(r0).data(), num_rows1, dim, &block1_packed);
+    PackedSimilarityColumns block1;
+    PackSimilarityColumns(bytes1.row(r0).data(), descriptors1.scales.data() + r0, num_rows1, dim,
+                          kernel, &block1);
+    const int stride = block1.num_columns;
     std::vector<float> tile(static_cast<size_t>(kColBlock) * stride);
     for (int c0 = 0; c0 < num2; c0 += kColBlock) {
       const int num_rows2 = std::min(kColBlock, num2 - c0);
-      ComputeSimilarities(block1_packed.data(), stride, values2.row(c0).data(), num_rows2, dim,
+      ComputeSimilarities(block1, bytes2.row(c0).data(), descriptors2.scales.data() + c0, num_rows2,
                           tile.data());
       const size_t col_offset = block * static_cast<size_t>(num2) + c0;
       ScanTile(tile.data(), num_rows2, num_rows1, stride, c0, rows.best.data() + r0,

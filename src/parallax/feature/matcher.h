@@ -1,5 +1,7 @@
 #pragma once
 
+#include <vector>
+
 #include "parallax/feature/types.h"
 
 namespace parallax {
@@ -12,14 +14,22 @@ struct FeatureMatchingOptions {
   void Check() const;
 };
 
-// Descriptors converted once to unit-norm floats, ready for matrix-product matching.
+// Descriptors ready for matching: the stored bytes and each row's 1 / norm, so that the
+// cosine similarity of two rows is an exact integer dot product times their scales.
 struct MatchableDescriptors {
-  Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values;  // N x 128
+  FeatureDescriptors bytes;   // N x 128, as stored.
+  std::vector<float> scales;  // 1 / norm per row (0 for an all-zero row).
+  int NumRows() const { return static_cast<int>(bytes.rows()); }
 };
 MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors);
 
-// Nearest neighbours by ||a - b||^2 = 2 - 2 a.b for unit vectors, computed blockwise as a
-// matrix product; ratio test, distance bound and optional cross-check.
+// The descriptors as unit-norm float rows (an all-zero row stays zero): what vocabulary trees
+// and other matchers take.
+using UnitDescriptorRows = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+UnitDescriptorRows ToUnitRows(const FeatureDescriptors& descriptors);
+
+// Nearest neighbours by ||a - b||^2 = 2 - 2 a.b for the unit vectors a and b, computed
+// blockwise as a matrix product; ratio test, distance bound and optional cross-check.
 FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
                                 const MatchableDescriptors& descriptors2,
                                 const FeatureMatchingOptions& options);

@@ -22,6 +22,18 @@ namespace {
 
 using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+// Unit rows stored as SIFT descriptors are: x 512, rounded, at most 255.
+FeatureDescriptors Quantised(const RowMatrixXf& values) {
+  FeatureDescriptors bytes(values.rows(), values.cols());
+  for (Eigen::Index i = 0; i < values.rows(); ++i) {
+    for (Eigen::Index k = 0; k < values.cols(); ++k) {
+      bytes(i, k) =
+          static_cast<uint8_t>(std::clamp(std::round(512.0f * values(i, k)), 0.0f, 255.0f));
+    }
+  }
+  return bytes;
+}
+
 // Non-negative unit vectors, like SIFT descriptors.
 RowMatrixXf RandomUnitDescriptors(int num) {
   RowMatrixXf values(num, 128);
@@ -60,18 +72,19 @@ struct ReferenceMatching {
 
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-RowMatrixXd BruteForceDistances(const RowMatrixXf& values1, const RowMatrixXf& values2) {
-  const int num1 = static_cast<int>(values1.rows());
-  const int num2 = static_cast<int>(values2.rows());
-  RowMatrixXd distances(num1, num2);
-  for (int i = 0; i < num1; ++i) {
-    for (int j = 0; j < num2; ++j) {
-      double sum = 0.0;
-      for (int k = 0; k < 128; ++k) {
-        const double difference = double{values1(i, k)} - double{values2(j, k)};
-        sum += difference * difference;
-      }
-      distances(i, j) = std::sqrt(sum);
+// Distances between the stored descriptors as unit vectors, in double precision.
+RowMatrixXd BruteForceDistances(const FeatureDescriptors& bytes1,
+                                const FeatureDescriptors& bytes2) {
+  const auto unit = [](const FeatureDescriptors& bytes) {
+    RowMatrixXd values = bytes.cast<double>();
+    for (Eigen::Index i = 0; i < values.rows(); ++i) values.row(i).normalize();
+    return values;
+  };
+  const RowMatrixXd values1 = unit(bytes1), values2 = unit(bytes2);
+  RowMatrixXd distances(values1.rows(), values2.rows());
+  for (Eigen::Index i = 0; i < values1.rows(); ++i) {
+    for (Eigen::Index j = 0; j < values2.rows(); ++j) {
+      distances(i, j) = (values1.row(i) - values2.row(j)).norm();
     }
   }
   return distances;
@@ -133,13 +146,13 @@ ReferenceMatching BruteForceMatch(const RowMatrixXd& distances,
 
 // Matches of `actual` for queries the reference did not flag as ambiguous must be exactly the
 // reference's.
-void ExpectMatchesAgree(const RowMatrixXf& values1, const RowMatrixXf& values2,
+void ExpectMatchesAgree(const FeatureDescriptors& bytes1, const FeatureDescriptors& bytes2,
                         const RowMatrixXd& distances, const FeatureMatchingOptions& options,
                         int max_ambiguous) {
   const ReferenceMatching reference = BruteForceMatch(distances, options);
   EXPECT_LE(reference.num_ambiguous, max_ambiguous);
-  MatchableDescriptors descriptors1{values1}, descriptors2{values2};
-  const FeatureMatches actual = MatchDescriptors(descriptors1, descriptors2, options);
+  const FeatureMatches actual =
+      MatchDescriptors(PrepareDescriptors(bytes1), PrepareDescriptors(bytes2), options);
   FeatureMatches decided;
   for (const FeatureMatch& match : actual) {
     if (!reference.ambiguous[match.point2D_idx1]) decided.push_back(match);
@@ -163,17 +176,16 @@ TEST(MatchDescriptors, RandomDescriptorsAgreeWithBruteForce) {
   const RowMatrixXf values1 = RandomUnitDescriptors(613);
   RowMatrixXf values2 = RandomUnitDescriptors(1037);
   PlantMatches(values1, 400, 0.08, &values2);
-  const RowMatrixXd distances = BruteForceDistances(values1, values2);
+  const FeatureDescriptors bytes1 = Quantised(values1), bytes2 = Quantised(values2);
+  const RowMatrixXd distances = BruteForceDistances(bytes1, bytes2);
   for (const bool cross_check : {false, true}) {
     for (const int num_threads : {1, 2, 3}) {
       SCOPED_TRACE(testing::Message()
                    << "cross_check " << cross_check << " threads " << num_threads);
-      ExpectMatchesAgree(values1, values2, distances, Options(0.8, 0.7, cross_check, num_threads),
+      ExpectMatchesAgree(bytes1, bytes2, distances, Options(0.8, 0.7, cross_check, num_threads), 3);
+      ExpectMatchesAgree(bytes1, bytes2, distances, Options(0.95, 2.0, cross_check, num_threads),
                          3);
-      ExpectMatchesAgree(values1, values2, distances, Options(0.95, 2.0, cross_check, num_threads),
-                         3);
-      ExpectMatchesAgree(values1, values2, distances, Options(0.8, 0.5, cross_check, num_threads),
-                         3);
+      ExpectMatchesAgree(bytes1, bytes2, distances, Options(0.8, 0.5, cross_check, num_threads), 3);
     }
   }
 }
@@ -181,12 +193,13 @@ TEST(MatchDescriptors, RandomDescriptorsAgreeWithBruteForce) {
 TEST(MatchDescriptors, NearestNeighbourOfEveryQueryWithoutFilters) {
   // With the ratio test and distance bound off, every query is matched to its nearest
   // neighbour (bar exact ties, which the ratio test at 1.0 still rejects).
-  const RowMatrixXf values1 = RandomUnitDescriptors(300);
-  const RowMatrixXf values2 = RandomUnitDescriptors(777);
+  const FeatureDescriptors bytes1 = Quantised(RandomUnitDescriptors(300));
+  const FeatureDescriptors bytes2 = Quantised(RandomUnitDescriptors(777));
   const FeatureMatchingOptions options = Options(1.0, 2.0, false, 2);
-  ExpectMatchesAgree(values1, values2, BruteForceDistances(values1, values2), options, 2);
-  MatchableDescriptors descriptors1{values1}, descriptors2{values2};
-  EXPECT_GE(MatchDescriptors(descriptors1, descriptors2, options).size(), 298u);
+  ExpectMatchesAgree(bytes1, bytes2, BruteForceDistances(bytes1, bytes2), options, 2);
+  EXPECT_GE(
+      MatchDescriptors(PrepareDescriptors(bytes1), PrepareDescriptors(bytes2), options).size(),
+      298u);
 }
 
 TEST(MatchDescriptors, QuantisedPermutedCopiesAreFoundExactly) {
@@ -226,7 +239,8 @@ TEST(MatchDescriptors, DuplicateNeighboursFailTheRatioTest) {
   values2.row(1) = values1.row(0);  // Two equally near neighbours: ambiguous, rejected.
   values2.row(2) = values1.row(1);
   values2.row(3) = values1.row(2);
-  MatchableDescriptors descriptors1{values1}, descriptors2{values2};
+  const MatchableDescriptors descriptors1 = PrepareDescriptors(Quantised(values1));
+  const MatchableDescriptors descriptors2 = PrepareDescriptors(Quantised(values2));
   const FeatureMatches matches =
       MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.7, false, 1));
   EXPECT_EQ(matches, (FeatureMatches{{1, 2}, {2, 3}}));
@@ -240,7 +254,8 @@ TEST(MatchDescriptors, CrossCheckKeepsMutualNearestNeighbours) {
   values1.row(1) = (base.row(0) + 0.3f * base.row(1)).normalized();
   values2.row(0) = (base.row(0) + 0.05f * base.row(2)).normalized();
   values2.row(1) = base.row(2);
-  MatchableDescriptors descriptors1{values1}, descriptors2{values2};
+  const MatchableDescriptors descriptors1 = PrepareDescriptors(Quantised(values1));
+  const MatchableDescriptors descriptors2 = PrepareDescriptors(Quantised(values2));
   EXPECT_EQ(MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.7, false, 1)),
             (FeatureMatches{{0, 0}, {1, 0}}));
   EXPECT_EQ(MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.7, true, 1)),
@@ -248,30 +263,31 @@ TEST(MatchDescriptors, CrossCheckKeepsMutualNearestNeighbours) {
 }
 
 TEST(MatchDescriptors, DistanceBound) {
-  const RowMatrixXf values1 = RandomUnitDescriptors(1);
-  RowMatrixXf values2 = RandomUnitDescriptors(2);
-  // Distance 0.5 exactly: a unit vector at angle theta with 2 sin(theta/2) = 0.5.
-  Eigen::RowVectorXf orthogonal =
-      values2.row(0) - values2.row(0).dot(values1.row(0)) * values1.row(0);
-  orthogonal.normalize();
-  const float theta = 2.0f * std::asin(0.25f);
-  values2.row(0) = std::cos(theta) * values1.row(0) + std::sin(theta) * orthogonal;
-  values2.row(1) = -values1.row(0);  // Distance 2: the ratio test passes.
-  MatchableDescriptors descriptors1{values1}, descriptors2{values2};
-  EXPECT_EQ(MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.51, true, 1)).size(), 1u);
-  EXPECT_EQ(MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.49, true, 1)).size(), 0u);
+  // (200, 0) and (120, 160) are unit vectors (1, 0) and (0.6, 0.8): distance sqrt(0.8), about
+  // 0.894. The other row of image 2 is orthogonal (distance sqrt(2)): the ratio test passes.
+  FeatureDescriptors bytes1 = FeatureDescriptors::Zero(1, 128);
+  FeatureDescriptors bytes2 = FeatureDescriptors::Zero(2, 128);
+  bytes1(0, 0) = 200;
+  bytes2(0, 0) = 120;
+  bytes2(0, 1) = 160;
+  bytes2(1, 2) = 255;
+  const MatchableDescriptors descriptors1 = PrepareDescriptors(bytes1);
+  const MatchableDescriptors descriptors2 = PrepareDescriptors(bytes2);
+  EXPECT_EQ(MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.9, true, 1)).size(), 1u);
+  EXPECT_EQ(MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.89, true, 1)).size(), 0u);
 }
 
 TEST(MatchDescriptors, EmptyAndSingleDescriptorSets) {
   const MatchableDescriptors empty = PrepareDescriptors(FeatureDescriptors(0, 128));
-  EXPECT_EQ(empty.values.rows(), 0);
-  MatchableDescriptors some{RandomUnitDescriptors(5)};
+  EXPECT_EQ(empty.NumRows(), 0);
+  const FeatureDescriptors some_bytes = Quantised(RandomUnitDescriptors(5));
+  const MatchableDescriptors some = PrepareDescriptors(some_bytes);
   const FeatureMatchingOptions options;
   EXPECT_TRUE(MatchDescriptors(empty, some, options).empty());
   EXPECT_TRUE(MatchDescriptors(some, empty, options).empty());
   EXPECT_TRUE(MatchDescriptors(empty, empty, options).empty());
   // One descriptor in image 2: no second neighbour, so the ratio test cannot reject.
-  MatchableDescriptors one{some.values.topRows(1)};
+  const MatchableDescriptors one = PrepareDescriptors(some_bytes.topRows(1));
   EXPECT_EQ(MatchDescriptors(some, one, options), (FeatureMatches{{0, 0}}));
 }
 
@@ -279,7 +295,8 @@ TEST(MatchDescriptors, SameResultForAnyThreadCount) {
   const RowMatrixXf values1 = RandomUnitDescriptors(1500);
   RowMatrixXf values2 = RandomUnitDescriptors(900);
   PlantMatches(values1, 600, 0.05, &values2);
-  MatchableDescriptors descriptors1{values1}, descriptors2{values2};
+  const MatchableDescriptors descriptors1 = PrepareDescriptors(Quantised(values1));
+  const MatchableDescriptors descriptors2 = PrepareDescriptors(Quantised(values2));
   const FeatureMatches single =
       MatchDescriptors(descriptors1, descriptors2, Options(0.8, 0.7, true, 1));
   EXPECT_GT(single.size(), 300u);
@@ -289,19 +306,36 @@ TEST(MatchDescriptors, SameResultForAnyThreadCount) {
   }
 }
 
-TEST(PrepareDescriptors, RowsBecomeUnitFloats) {
+// Rows (3, 4, 0, ...), all 255, and all 0.
+FeatureDescriptors ThreeRows() {
   FeatureDescriptors descriptors(3, 128);
   descriptors.setZero();
   descriptors(0, 0) = 3;
   descriptors(0, 1) = 4;
   descriptors.row(1).setConstant(255);
+  return descriptors;
+}
+
+TEST(PrepareDescriptors, ScalesAreInverseNorms) {
+  const FeatureDescriptors descriptors = ThreeRows();
   const MatchableDescriptors matchable = PrepareDescriptors(descriptors);
-  ASSERT_EQ(matchable.values.rows(), 3);
-  ASSERT_EQ(matchable.values.cols(), 128);
-  EXPECT_FLOAT_EQ(matchable.values(0, 0), 0.6f);
-  EXPECT_FLOAT_EQ(matchable.values(0, 1), 0.8f);
-  EXPECT_NEAR(matchable.values.row(1).norm(), 1.0f, 1e-6f);
-  EXPECT_EQ(matchable.values.row(2).norm(), 0.0f);  // Zero rows stay zero.
+  ASSERT_EQ(matchable.NumRows(), 3);
+  EXPECT_EQ(matchable.bytes, descriptors);
+  ASSERT_EQ(matchable.scales.size(), 3u);
+  EXPECT_FLOAT_EQ(matchable.scales[0], 0.2f);
+  EXPECT_FLOAT_EQ(matchable.scales[1], 1.0f / (255.0f * std::sqrt(128.0f)));
+  EXPECT_EQ(matchable.scales[2], 0.0f);  // A zero row never matches.
+}
+
+TEST(ToUnitRows, RowsBecomeUnitFloats) {
+  const FeatureDescriptors descriptors = ThreeRows();
+  const UnitDescriptorRows values = ToUnitRows(descriptors);
+  ASSERT_EQ(values.rows(), 3);
+  ASSERT_EQ(values.cols(), 128);
+  EXPECT_FLOAT_EQ(values(0, 0), 0.6f);
+  EXPECT_FLOAT_EQ(values(0, 1), 0.8f);
+  EXPECT_NEAR(values.row(1).norm(), 1.0f, 1e-6f);
+  EXPECT_EQ(values.row(2).norm(), 0.0f);  // Zero rows stay zero.
 }
 
 TEST(FeatureMatchingOptions, Check) {
@@ -315,9 +349,8 @@ TEST(FeatureMatchingOptions, Check) {
   options = {};
   options.num_threads = 0;
   EXPECT_THROW(options.Check(), CheckError);
-  MatchableDescriptors a{RandomUnitDescriptors(2)}, b;
-  b.values.resize(2, 64);
-  b.values.setOnes();
+  const MatchableDescriptors a = PrepareDescriptors(Quantised(RandomUnitDescriptors(2)));
+  const MatchableDescriptors b = PrepareDescriptors(FeatureDescriptors::Ones(2, 64));
   EXPECT_THROW(MatchDescriptors(a, b, FeatureMatchingOptions{}), CheckError);
 }
 

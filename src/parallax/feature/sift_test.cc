@@ -257,8 +257,8 @@ TEST(Sift, NativeAndOpenCvDescriptorsShareOneLayout) {
   CreateSiftExtractor(options)->Extract(image, &native_keypoints, &native_descriptors);
   options.implementation = SiftImplementation::kOpenCv;
   CreateSiftExtractor(options)->Extract(image, &opencv_keypoints, &opencv_descriptors);
-  const MatchableDescriptors native = PrepareDescriptors(native_descriptors);
-  const MatchableDescriptors opencv = PrepareDescriptors(opencv_descriptors);
+  const UnitDescriptorRows native = ToUnitRows(native_descriptors);
+  const UnitDescriptorRows opencv = ToUnitRows(opencv_descriptors);
   int num_counterparts = 0, num_nearest = 0;
   std::vector<double> similarities;
   for (size_t i = 0; i < native_keypoints.size(); ++i) {
@@ -273,8 +273,8 @@ TEST(Sift, NativeAndOpenCvDescriptorsShareOneLayout) {
       }
       ++num_counterparts;
       Eigen::Index nearest = 0;
-      (opencv.values * native.values.row(i).transpose()).maxCoeff(&nearest);
-      similarities.push_back(opencv.values.row(j).dot(native.values.row(i)));
+      (opencv * native.row(i).transpose()).maxCoeff(&nearest);
+      similarities.push_back(opencv.row(j).dot(native.row(i)));
       if (nearest == static_cast<Eigen::Index>(j)) ++num_nearest;
       break;
     }

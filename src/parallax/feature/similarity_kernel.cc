@@ -1,6 +1,6 @@
 #include "parallax/feature/similarity_kernel.h"
 
-#include <cmath>
+#include <cstring>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -11,27 +11,34 @@
 namespace parallax {
 namespace {
 
-// Rows of b per micro-tile: 4 rows x 2 vectors = 8 accumulators, and per k 2 loads of a and
-// 4 broadcasts of b for 8 FMAs.
+// Rows of b per micro-tile: 4 rows x 2 vectors = 8 accumulators, and per step 2 loads of a
+// and 4 broadcasts of b for 8 multiply-adds.
 constexpr int kRowsPerTile = 4;
 
 constexpr int kPanel = kSimilarityPanelWidth;
 
-// Column c of panel p, dimension k.
-inline ptrdiff_t PackedIndex(int p, int k, int c, int dim) {
-  return (static_cast<ptrdiff_t>(p) * dim + k) * kPanel + c;
+// Words of one panel: `dim` dimensions of kPanel columns, in groups of `group` dimensions.
+inline ptrdiff_t PackedIndex(int column, int k, int group, int dim) {
+  const int panel = column / kPanel, c = column % kPanel;
+  return ((static_cast<ptrdiff_t>(panel) * (dim / group) + k / group) * kPanel + c) * group +
+         k % group;
 }
 
-void SimilaritiesScalar(const float* a_packed, int padded_a, const float* b, int num_b, int dim,
-                        float* similarities) {
+// float(dot) * scale_a * scale_b, in that order in every kernel.
+inline float Similarity(int32_t dot, float scale_a, float scale_b) {
+  return static_cast<float>(dot) * scale_a * scale_b;
+}
+
+void SimilaritiesScalar(const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
+                        int num_b, float* similarities) {
+  const int dim = a.dim;
   for (int j = 0; j < num_b; ++j) {
-    const float* b_row = b + static_cast<ptrdiff_t>(j) * dim;
-    for (int i = 0; i < padded_a; ++i) {
-      float sum = 0.0f;
-      for (int k = 0; k < dim; ++k) {
-        sum = std::fma(b_row[k], a_packed[PackedIndex(i / kPanel, k, i % kPanel, dim)], sum);
-      }
-      similarities[static_cast<ptrdiff_t>(j) * padded_a + i] = sum;
+    const uint8_t* b_row = b + static_cast<ptrdiff_t>(j) * dim;
+    for (int i = 0; i < a.num_columns; ++i) {
+      int32_t dot = 0;
+      for (int k = 0; k < dim; ++k) dot += b_row[k] * a.pairs[PackedIndex(i, k, 2, dim)];
+      similarities[static_cast<ptrdiff_t>(j) * a.num_columns + i] =
+          Similarity(dot, a.scales[i], b_scales[j]);
     }
   }
 }
@@ -39,85 +46,126 @@ void SimilaritiesScalar(const float* a_packed, int padded_a, const float* b, int
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define PARALLAX_SIMILARITY_SIMD 1
 
-// kRows rows of b against 16 columns of a (two 8-lane vectors) starting at column i0.
-// kRows rows of b against the 16 columns of a panel from column `half` * 16, written at
-// out[r * padded_a + i0].
+inline int32_t Load32(const void* bytes) {
+  int32_t value;
+  std::memcpy(&value, bytes, sizeof(value));
+  return value;
+}
+
+// kRows rows of b (16-bit) against the 16 columns of a panel from column `half` * 16, written
+// at out[r * num_columns + i0].
 template <int kRows>
-__attribute__((target("avx2,fma"))) inline void TileAvx2(const float* panel, int half, int padded_a,
-                                                         const float* b, int dim, int i0,
-                                                         float* out) {
-  __m256 sum[kRows][2];
-  for (int r = 0; r < kRows; ++r) sum[r][0] = sum[r][1] = _mm256_setzero_ps();
-  for (int k = 0; k < dim; ++k) {
-    const float* a = panel + static_cast<ptrdiff_t>(k) * kPanel + half * 16;
-    const __m256 a0 = _mm256_loadu_ps(a);
-    const __m256 a1 = _mm256_loadu_ps(a + 8);
+__attribute__((target("avx2,fma"))) inline void TileAvx2(const int16_t* panel, int half,
+                                                         const int16_t* b, const float* b_scales,
+                                                         int dim, const float* a_scales,
+                                                         int num_columns, float* out) {
+  __m256i sum[kRows][2];
+  for (int r = 0; r < kRows; ++r) sum[r][0] = sum[r][1] = _mm256_setzero_si256();
+  for (int kp = 0; kp < dim / 2; ++kp) {
+    const int16_t* column_pairs = panel + (static_cast<ptrdiff_t>(kp) * kPanel + half * 16) * 2;
+    const __m256i a0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(column_pairs));
+    const __m256i a1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(column_pairs + 16));
     for (int r = 0; r < kRows; ++r) {
-      const __m256 b_rk = _mm256_broadcast_ss(b + static_cast<ptrdiff_t>(r) * dim + k);
-      sum[r][0] = _mm256_fmadd_ps(b_rk, a0, sum[r][0]);
-      sum[r][1] = _mm256_fmadd_ps(b_rk, a1, sum[r][1]);
+      const __m256i b_pair =
+          _mm256_set1_epi32(Load32(b + static_cast<ptrdiff_t>(r) * dim + 2 * kp));
+      sum[r][0] = _mm256_add_epi32(sum[r][0], _mm256_madd_epi16(b_pair, a0));
+      sum[r][1] = _mm256_add_epi32(sum[r][1], _mm256_madd_epi16(b_pair, a1));
     }
   }
+  const __m256 scale0 = _mm256_loadu_ps(a_scales), scale1 = _mm256_loadu_ps(a_scales + 8);
   for (int r = 0; r < kRows; ++r) {
-    _mm256_storeu_ps(out + static_cast<ptrdiff_t>(r) * padded_a + i0, sum[r][0]);
-    _mm256_storeu_ps(out + static_cast<ptrdiff_t>(r) * padded_a + i0 + 8, sum[r][1]);
+    const __m256 b_scale = _mm256_set1_ps(b_scales[r]);
+    float* row = out + static_cast<ptrdiff_t>(r) * num_columns;
+    _mm256_storeu_ps(row,
+                     _mm256_mul_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(sum[r][0]), scale0), b_scale));
+    _mm256_storeu_ps(row + 8,
+                     _mm256_mul_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(sum[r][1]), scale1), b_scale));
   }
 }
 
-__attribute__((target("avx2,fma"))) void SimilaritiesAvx2(const float* a_packed, int padded_a,
-                                                          const float* b, int num_b, int dim,
-                                                          float* similarities) {
-  for (int i0 = 0; i0 < padded_a; i0 += 16) {
-    const float* panel = a_packed + PackedIndex(i0 / kPanel, 0, 0, dim);
+__attribute__((target("avx2,fma"))) void SimilaritiesAvx2(const PackedSimilarityColumns& a,
+                                                          const uint8_t* b, const float* b_scales,
+                                                          int num_b, float* similarities) {
+  const int dim = a.dim;
+  // b widened to 16 bits once, so that a broadcast carries a pair of dimensions.
+  thread_local std::vector<int16_t> b_words;
+  b_words.resize(static_cast<size_t>(num_b) * dim);
+  for (size_t n = 0; n < b_words.size(); ++n) b_words[n] = b[n];
+  for (int i0 = 0; i0 < a.num_columns; i0 += 16) {
+    const int16_t* panel = a.pairs.data() + PackedIndex(i0 - i0 % kPanel, 0, 2, dim);
     const int half = (i0 % kPanel) / 16;
     int j = 0;
     for (; j + kRowsPerTile <= num_b; j += kRowsPerTile) {
-      TileAvx2<kRowsPerTile>(panel, half, padded_a, b + static_cast<ptrdiff_t>(j) * dim, dim, i0,
-                             similarities + static_cast<ptrdiff_t>(j) * padded_a);
+      TileAvx2<kRowsPerTile>(panel, half, b_words.data() + static_cast<ptrdiff_t>(j) * dim,
+                             b_scales + j, dim, a.scales.data() + i0, a.num_columns,
+                             similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
     for (; j < num_b; ++j) {
-      TileAvx2<1>(panel, half, padded_a, b + static_cast<ptrdiff_t>(j) * dim, dim, i0,
-                  similarities + static_cast<ptrdiff_t>(j) * padded_a);
+      TileAvx2<1>(panel, half, b_words.data() + static_cast<ptrdiff_t>(j) * dim, b_scales + j, dim,
+                  a.scales.data() + i0, a.num_columns,
+                  similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
   }
 }
 
-// The same with 16-lane vectors: kRows rows of b against the 32 columns of a panel.
+// The masked conversion with every lane set is the plain one, which GCC 12's header
+// implements with an uninitialised value it then warns about.
+__attribute__((target("avx512f"))) inline __m512 ToFloat(__m512i value) {
+  return _mm512_maskz_cvtepi32_ps(0xFFFF, value);
+}
+
+// kRows rows of b (bytes) against the 32 columns of a panel. vpdpbusd multiplies unsigned by
+// signed bytes, so a is stored as value - 128 and b's sum times 128 is added back.
 template <int kRows>
-__attribute__((target("avx512f"))) inline void TileAvx512(const float* panel, int padded_a,
-                                                          const float* b, int dim, int i0,
-                                                          float* out) {
-  __m512 sum[kRows][2];
-  for (int r = 0; r < kRows; ++r) sum[r][0] = sum[r][1] = _mm512_setzero_ps();
-  for (int k = 0; k < dim; ++k) {
-    const float* a = panel + static_cast<ptrdiff_t>(k) * kPanel;
-    const __m512 a0 = _mm512_loadu_ps(a);
-    const __m512 a1 = _mm512_loadu_ps(a + 16);
+__attribute__((target("avx512f,avx512vnni"))) inline void TileAvx512Vnni(
+    const int8_t* panel, const uint8_t* b, const int32_t* b_sums, const float* b_scales, int dim,
+    const float* a_scales, int num_columns, float* out) {
+  __m512i sum[kRows][2];
+  for (int r = 0; r < kRows; ++r) sum[r][0] = sum[r][1] = _mm512_setzero_si512();
+  for (int kq = 0; kq < dim / 4; ++kq) {
+    const int8_t* column_quads = panel + static_cast<ptrdiff_t>(kq) * kPanel * 4;
+    const __m512i a0 = _mm512_loadu_si512(column_quads);
+    const __m512i a1 = _mm512_loadu_si512(column_quads + 64);
     for (int r = 0; r < kRows; ++r) {
-      const __m512 b_rk = _mm512_set1_ps(b[static_cast<ptrdiff_t>(r) * dim + k]);
-      sum[r][0] = _mm512_fmadd_ps(b_rk, a0, sum[r][0]);
-      sum[r][1] = _mm512_fmadd_ps(b_rk, a1, sum[r][1]);
+      const __m512i b_quad =
+          _mm512_set1_epi32(Load32(b + static_cast<ptrdiff_t>(r) * dim + 4 * kq));
+      sum[r][0] = _mm512_dpbusd_epi32(sum[r][0], b_quad, a0);
+      sum[r][1] = _mm512_dpbusd_epi32(sum[r][1], b_quad, a1);
     }
   }
+  const __m512 scale0 = _mm512_loadu_ps(a_scales), scale1 = _mm512_loadu_ps(a_scales + 16);
   for (int r = 0; r < kRows; ++r) {
-    _mm512_storeu_ps(out + static_cast<ptrdiff_t>(r) * padded_a + i0, sum[r][0]);
-    _mm512_storeu_ps(out + static_cast<ptrdiff_t>(r) * padded_a + i0 + 16, sum[r][1]);
+    const __m512i offset = _mm512_set1_epi32(128 * b_sums[r]);
+    const __m512 b_scale = _mm512_set1_ps(b_scales[r]);
+    float* row = out + static_cast<ptrdiff_t>(r) * num_columns;
+    const __m512 dot0 = ToFloat(_mm512_add_epi32(sum[r][0], offset));
+    const __m512 dot1 = ToFloat(_mm512_add_epi32(sum[r][1], offset));
+    _mm512_storeu_ps(row, _mm512_mul_ps(_mm512_mul_ps(dot0, scale0), b_scale));
+    _mm512_storeu_ps(row + 16, _mm512_mul_ps(_mm512_mul_ps(dot1, scale1), b_scale));
   }
 }
 
-__attribute__((target("avx512f"))) void SimilaritiesAvx512(const float* a_packed, int padded_a,
-                                                           const float* b, int num_b, int dim,
-                                                           float* similarities) {
-  for (int i0 = 0; i0 < padded_a; i0 += kPanel) {
-    const float* panel = a_packed + PackedIndex(i0 / kPanel, 0, 0, dim);
+__attribute__((target("avx512f,avx512vnni"))) void SimilaritiesAvx512Vnni(
+    const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales, int num_b,
+    float* similarities) {
+  const int dim = a.dim;
+  thread_local std::vector<int32_t> b_sums;
+  b_sums.assign(num_b, 0);
+  for (int j = 0; j < num_b; ++j) {
+    for (int k = 0; k < dim; ++k) b_sums[j] += b[static_cast<ptrdiff_t>(j) * dim + k];
+  }
+  for (int i0 = 0; i0 < a.num_columns; i0 += kPanel) {
+    const int8_t* panel = a.quads.data() + PackedIndex(i0, 0, 4, dim);
     int j = 0;
     for (; j + kRowsPerTile <= num_b; j += kRowsPerTile) {
-      TileAvx512<kRowsPerTile>(panel, padded_a, b + static_cast<ptrdiff_t>(j) * dim, dim, i0,
-                               similarities + static_cast<ptrdiff_t>(j) * padded_a);
+      TileAvx512Vnni<kRowsPerTile>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums.data() + j,
+                                   b_scales + j, dim, a.scales.data() + i0, a.num_columns,
+                                   similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
     for (; j < num_b; ++j) {
-      TileAvx512<1>(panel, padded_a, b + static_cast<ptrdiff_t>(j) * dim, dim, i0,
-                    similarities + static_cast<ptrdiff_t>(j) * padded_a);
+      TileAvx512Vnni<1>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums.data() + j, b_scales + j,
+                        dim, a.scales.data() + i0, a.num_columns,
+                        similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
   }
 }
@@ -125,16 +173,34 @@ __attribute__((target("avx512f"))) void SimilaritiesAvx512(const float* a_packed
 
 }  // namespace
 
-int PackSimilarityColumns(const float* a, int num_a, int dim, std::vector<float>* packed) {
-  const int padded_a = (num_a + kPanel - 1) / kPanel * kPanel;
-  packed->assign(static_cast<size_t>(padded_a) * dim, 0.0f);
-  for (int i = 0; i < num_a; ++i) {
-    for (int k = 0; k < dim; ++k) {
-      (*packed)[PackedIndex(i / kPanel, k, i % kPanel, dim)] =
-          a[static_cast<ptrdiff_t>(i) * dim + k];
+void PackSimilarityColumns(const uint8_t* a, const float* a_scales, int num_a, int dim,
+                           SimilarityKernel kernel, PackedSimilarityColumns* packed) {
+  PARALLAX_CHECK_GE(num_a, 0);
+  PARALLAX_CHECK_EQ(dim % 4, 0);
+  packed->kernel = kernel;
+  packed->dim = dim;
+  packed->num_columns = (num_a + kPanel - 1) / kPanel * kPanel;
+  packed->scales.assign(packed->num_columns, 0.0f);
+  std::copy(a_scales, a_scales + num_a, packed->scales.begin());
+  const size_t size = static_cast<size_t>(packed->num_columns) * dim;
+  if (kernel == SimilarityKernel::kAvx512Vnni) {
+    packed->pairs.clear();
+    packed->quads.assign(size, 0);
+    for (int i = 0; i < num_a; ++i) {
+      for (int k = 0; k < dim; ++k) {
+        packed->quads[PackedIndex(i, k, 4, dim)] =
+            static_cast<int8_t>(a[static_cast<ptrdiff_t>(i) * dim + k] - 128);
+      }
+    }
+  } else {
+    packed->quads.clear();
+    packed->pairs.assign(size, 0);
+    for (int i = 0; i < num_a; ++i) {
+      for (int k = 0; k < dim; ++k) {
+        packed->pairs[PackedIndex(i, k, 2, dim)] = a[static_cast<ptrdiff_t>(i) * dim + k];
+      }
     }
   }
-  return padded_a;
 }
 
 bool SimilarityKernelAvailable(SimilarityKernel kernel) {
@@ -145,9 +211,9 @@ bool SimilarityKernelAvailable(SimilarityKernel kernel) {
     case SimilarityKernel::kAvx2:
       __builtin_cpu_init();
       return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-    case SimilarityKernel::kAvx512:
+    case SimilarityKernel::kAvx512Vnni:
       __builtin_cpu_init();
-      return __builtin_cpu_supports("avx512f");
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vnni");
 #endif
     default:
       return false;
@@ -156,7 +222,7 @@ bool SimilarityKernelAvailable(SimilarityKernel kernel) {
 
 SimilarityKernel BestSimilarityKernel() {
   static const SimilarityKernel best = [] {
-    for (const SimilarityKernel kernel : {SimilarityKernel::kAvx512, SimilarityKernel::kAvx2}) {
+    for (const SimilarityKernel kernel : {SimilarityKernel::kAvx512Vnni, SimilarityKernel::kAvx2}) {
       if (SimilarityKernelAvailable(kernel)) return kernel;
     }
     return SimilarityKernel::kScalar;
@@ -164,19 +230,19 @@ SimilarityKernel BestSimilarityKernel() {
   return best;
 }
 
-void ComputeSimilarities(const float* a_packed, int padded_a, const float* b, int num_b, int dim,
-                         float* similarities, SimilarityKernel kernel) {
-  PARALLAX_CHECK_EQ(padded_a % kPanel, 0);
-  PARALLAX_CHECK(SimilarityKernelAvailable(kernel));
-  switch (kernel) {
+void ComputeSimilarities(const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
+                         int num_b, float* similarities) {
+  PARALLAX_CHECK_EQ(a.num_columns % kPanel, 0);
+  PARALLAX_CHECK(SimilarityKernelAvailable(a.kernel));
+  switch (a.kernel) {
 #if defined(PARALLAX_SIMILARITY_SIMD)
-    case SimilarityKernel::kAvx512:
-      return SimilaritiesAvx512(a_packed, padded_a, b, num_b, dim, similarities);
+    case SimilarityKernel::kAvx512Vnni:
+      return SimilaritiesAvx512Vnni(a, b, b_scales, num_b, similarities);
     case SimilarityKernel::kAvx2:
-      return SimilaritiesAvx2(a_packed, padded_a, b, num_b, dim, similarities);
+      return SimilaritiesAvx2(a, b, b_scales, num_b, similarities);
 #endif
     default:
-      return SimilaritiesScalar(a_packed, padded_a, b, num_b, dim, similarities);
+      return SimilaritiesScalar(a, b, b_scales, num_b, similarities);
   }
 }
 

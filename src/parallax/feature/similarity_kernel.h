@@ -1,19 +1,19 @@
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 namespace parallax {
 
-// Dot products of descriptor blocks for the matcher, each summed in one fixed order: a chain
-// of fused multiply-adds over the dimensions, k = 0, 1, ..., dim - 1, starting from 0. Every
-// implementation computes exactly that chain per output (vectorised across outputs, never
-// across k), so the AVX-512 kernel, the AVX2 kernel and the scalar std::fma reference give
-// the same bits, and a model does not depend on which one the CPU runs
+// Cosine similarities of descriptor blocks for the matcher. The dot product of two stored
+// (uint8) descriptors is an integer, summed exactly by every implementation, and the
+// similarity is float(dot) * scale_a * scale_b, multiplied in that order. So every kernel
+// gives the same bits, and a model does not depend on which one the CPU runs
 // (docs/portable-build.md).
 enum class SimilarityKernel {
-  kScalar,  // std::fma, one output at a time: the reference.
-  kAvx2,    // 8 lanes (x86-64-v3).
-  kAvx512,  // 16 lanes, where the CPU has AVX-512F.
+  kScalar,      // int32 sums, one output at a time: the reference.
+  kAvx2,        // vpmaddwd on 16-bit pairs, 8 columns per vector (x86-64-v3).
+  kAvx512Vnni,  // vpdpbusd on byte quads, 16 columns per vector (AVX-512 VNNI).
 };
 
 // The fastest kernel this CPU runs (chosen once per process).
@@ -22,17 +22,28 @@ SimilarityKernel BestSimilarityKernel();
 // Whether `kernel` runs on this CPU and in this build.
 bool SimilarityKernelAvailable(SimilarityKernel kernel);
 
-// The descriptors of block a as the kernels read them: panels of kSimilarityPanelWidth
-// columns, each panel k-major (packed[(p * dim + k) * kSimilarityPanelWidth + c] = a[p * width
-// + c][k]), so that a micro-tile streams one contiguous panel. Columns past num_a are zero.
-// Returns the padded column count (a multiple of the panel width).
+// Block a's descriptors in the layout `kernel` reads: panels of kSimilarityPanelWidth columns,
+// each panel grouped by dimension (pairs of dimensions for kScalar and kAvx2, quads for
+// kAvx512Vnni) so that a micro-tile streams one contiguous panel. Columns past the block's
+// descriptors are zero with scale 0.
 constexpr int kSimilarityPanelWidth = 32;
-int PackSimilarityColumns(const float* a, int num_a, int dim, std::vector<float>* packed);
+struct PackedSimilarityColumns {
+  SimilarityKernel kernel = SimilarityKernel::kScalar;
+  int num_columns = 0;         // Padded: a multiple of kSimilarityPanelWidth.
+  int dim = 0;                 // A multiple of 4.
+  std::vector<int16_t> pairs;  // kScalar, kAvx2: [panel][dim / 2][column][2].
+  std::vector<int8_t> quads;   // kAvx512Vnni: [panel][dim / 4][column][4], value - 128.
+  std::vector<float> scales;   // Per column.
+};
 
-// similarities[j * padded_a + i] = b[j] . a[i] for j < num_b and i < padded_a (0 for the
-// padding columns), with a packed by PackSimilarityColumns and b holding num_b descriptors of
-// `dim` floats as rows.
-void ComputeSimilarities(const float* a_packed, int padded_a, const float* b, int num_b, int dim,
-                         float* similarities, SimilarityKernel kernel = BestSimilarityKernel());
+// Packs num_a descriptors of `dim` bytes (rows of a) with their scales (1 / norm).
+void PackSimilarityColumns(const uint8_t* a, const float* a_scales, int num_a, int dim,
+                           SimilarityKernel kernel, PackedSimilarityColumns* packed);
+
+// similarities[j * a.num_columns + i] = float(b[j] . a[i]) * a.scales[i] * b_scales[j] for
+// j < num_b and every column i of a (0 for the padding), with b holding num_b descriptors of
+// a.dim bytes as rows. Runs a's kernel.
+void ComputeSimilarities(const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
+                         int num_b, float* similarities);
 
 }  // namespace parallax

@@ -14,52 +14,63 @@ constexpr int kDim = 128;
 
 struct Blocks {
   int num_a = 0;
-  int padded_a = 0;
   int num_b = 0;
-  std::vector<float> a;         // num_a x kDim.
-  std::vector<float> a_packed;  // PackSimilarityColumns(a).
-  std::vector<float> b;         // num_b x kDim.
+  std::vector<uint8_t> a;  // num_a x kDim.
+  std::vector<float> a_scales;
+  std::vector<uint8_t> b;  // num_b x kDim.
+  std::vector<float> b_scales;
 };
 
-// Descriptor-like values: non-negative, of mixed magnitude, so that the order of the sums
-// matters in the last bit.
+// Bytes over their whole range, the extremes often (0 and 255 test the 16-bit and signed-byte
+// arithmetic at its limits), and one row of each block all 255.
+std::vector<uint8_t> RandomBytes(int rows) {
+  std::vector<uint8_t> bytes(static_cast<size_t>(rows) * kDim);
+  for (uint8_t& value : bytes) {
+    const int64_t kind = RandomUniformInteger(0, 3);
+    value = kind == 0 ? 0 : kind == 1 ? 255 : static_cast<uint8_t>(RandomUniformInteger(0, 255));
+  }
+  std::fill_n(bytes.begin(), kDim, uint8_t{255});
+  return bytes;
+}
+
 Blocks RandomBlocks(int num_a, int num_b) {
   Blocks blocks;
   blocks.num_a = num_a;
   blocks.num_b = num_b;
-  blocks.a.resize(static_cast<size_t>(num_a) * kDim);
-  for (size_t n = 0; n < blocks.a.size(); ++n) {
-    blocks.a[n] = RandomUniformReal(0.0f, 1.0f) * (n % 7 == 0 ? 100.0f : 0.01f);
-  }
-  blocks.padded_a = PackSimilarityColumns(blocks.a.data(), num_a, kDim, &blocks.a_packed);
-  blocks.b.resize(static_cast<size_t>(num_b) * kDim);
-  for (float& value : blocks.b) value = RandomUniformReal(0.0f, 1.0f);
+  blocks.a = RandomBytes(num_a);
+  blocks.b = RandomBytes(num_b);
+  for (int i = 0; i < num_a; ++i) blocks.a_scales.push_back(RandomUniformReal(1e-4f, 1e-2f));
+  for (int j = 0; j < num_b; ++j) blocks.b_scales.push_back(RandomUniformReal(1e-4f, 1e-2f));
   return blocks;
 }
 
-std::vector<float> Similarities(const Blocks& blocks, SimilarityKernel kernel) {
-  std::vector<float> out(static_cast<size_t>(blocks.num_b) * blocks.padded_a, -1.0f);
-  ComputeSimilarities(blocks.a_packed.data(), blocks.padded_a, blocks.b.data(), blocks.num_b, kDim,
-                      out.data(), kernel);
+std::vector<float> Similarities(const Blocks& blocks, SimilarityKernel kernel, int* num_columns) {
+  PackedSimilarityColumns packed;
+  PackSimilarityColumns(blocks.a.data(), blocks.a_scales.data(), blocks.num_a, kDim, kernel,
+                        &packed);
+  *num_columns = packed.num_columns;
+  std::vector<float> out(static_cast<size_t>(blocks.num_b) * packed.num_columns, -1.0f);
+  ComputeSimilarities(packed, blocks.b.data(), blocks.b_scales.data(), blocks.num_b, out.data());
   return out;
 }
 
-TEST(SimilarityKernel, ScalarReferenceIsTheDotProduct) {
+TEST(SimilarityKernel, ScalarReferenceIsTheScaledIntegerDotProduct) {
   const Blocks blocks = RandomBlocks(45, 7);
-  EXPECT_EQ(blocks.padded_a, 64);
-  const std::vector<float> out = Similarities(blocks, SimilarityKernel::kScalar);
+  int num_columns = 0;
+  const std::vector<float> out = Similarities(blocks, SimilarityKernel::kScalar, &num_columns);
+  EXPECT_EQ(num_columns, 64);
   for (int j = 0; j < blocks.num_b; ++j) {
-    for (int i = 0; i < blocks.padded_a; ++i) {
-      const float value = out[j * blocks.padded_a + i];
+    for (int i = 0; i < num_columns; ++i) {
+      const float value = out[j * num_columns + i];
       if (i >= blocks.num_a) {
         EXPECT_EQ(value, 0.0f) << "padding column " << i;
         continue;
       }
-      double dot = 0.0;
-      for (int k = 0; k < kDim; ++k) {
-        dot += static_cast<double>(blocks.b[j * kDim + k]) * blocks.a[i * kDim + k];
-      }
-      EXPECT_NEAR(value, dot, 1e-5 * std::max(1.0, dot)) << j << " " << i;
+      int64_t dot = 0;
+      for (int k = 0; k < kDim; ++k)
+        dot += int64_t{blocks.b[j * kDim + k]} * blocks.a[i * kDim + k];
+      EXPECT_EQ(value, static_cast<float>(dot) * blocks.a_scales[i] * blocks.b_scales[j])
+          << j << " " << i;
     }
   }
 }
@@ -71,10 +82,14 @@ TEST(SimilarityKernel, EveryKernelGivesTheReferenceBits) {
   for (const auto& [num_a, num_b] :
        {std::pair{45, 7}, std::pair{256, 256}, std::pair{1, 1}, std::pair{100, 13}}) {
     const Blocks blocks = RandomBlocks(num_a, num_b);
-    const std::vector<float> reference = Similarities(blocks, SimilarityKernel::kScalar);
-    for (const SimilarityKernel kernel : {SimilarityKernel::kAvx2, SimilarityKernel::kAvx512}) {
+    int reference_columns = 0;
+    const std::vector<float> reference =
+        Similarities(blocks, SimilarityKernel::kScalar, &reference_columns);
+    for (const SimilarityKernel kernel : {SimilarityKernel::kAvx2, SimilarityKernel::kAvx512Vnni}) {
       if (!SimilarityKernelAvailable(kernel)) continue;
-      const std::vector<float> out = Similarities(blocks, kernel);
+      int num_columns = 0;
+      const std::vector<float> out = Similarities(blocks, kernel, &num_columns);
+      ASSERT_EQ(num_columns, reference_columns);
       EXPECT_EQ(std::memcmp(out.data(), reference.data(), out.size() * sizeof(float)), 0)
           << "kernel " << static_cast<int>(kernel) << ", " << num_a << " x " << num_b;
       ++compared;

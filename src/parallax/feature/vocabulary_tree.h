@@ -26,7 +26,7 @@ struct VocabularyTreeOptions {
 };
 
 // A vocabulary tree (Nister & Stewenius, "Scalable Recognition with a Vocabulary Tree", CVPR
-// 2006): hierarchical k-means on descriptors (unit float rows, as PrepareDescriptors makes them),
+// 2006): hierarchical k-means on descriptors (unit float rows, as ToUnitRows makes them),
 // the leaves being the visual words. Distances are summed in one fixed order of fused
 // multiply-adds whatever the CPU (AVX2 or scalar), the batch or the thread count: a descriptor
 // always gets the same word, and a seed the same tree.

@@ -66,9 +66,12 @@ MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
     return scale_a != scale_b ? scale_a > scale_b : a < b;
   });
   MatchableDescriptors largest;
-  largest.values.resize(static_cast<Eigen::Index>(keep), descriptors.values.cols());
-  for (size_t k = 0; k < keep; ++k)
-    largest.values.row(static_cast<Eigen::Index>(k)) = descriptors.values.row(order[k]);
+  largest.bytes.resize(static_cast<Eigen::Index>(keep), descriptors.bytes.cols());
+  largest.scales.resize(keep);
+  for (size_t k = 0; k < keep; ++k) {
+    largest.bytes.row(static_cast<Eigen::Index>(k)) = descriptors.bytes.row(order[k]);
+    largest.scales[k] = descriptors.scales[order[k]];
+  }
   return largest;
 }
 

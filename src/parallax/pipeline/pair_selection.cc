@@ -37,7 +37,7 @@ VocabularyTree::RowMatrixXf SampleTrainingDescriptors(const std::vector<image_t>
   const double share =
       total == 0 ? 1.0 : std::min(1.0, static_cast<double>(max_descriptors) / total);
   std::mt19937_64 engine(seed);
-  std::vector<MatchableDescriptors> parts;
+  std::vector<UnitDescriptorRows> parts;
   Eigen::Index num_rows = 0, dimension = 0;
   for (const image_t image_id : image_ids) {
     const FeatureDescriptors descriptors = database.ReadDescriptors(image_id);
@@ -49,16 +49,16 @@ VocabularyTree::RowMatrixXf SampleTrainingDescriptors(const std::vector<image_t>
     FeatureDescriptors sample(static_cast<Eigen::Index>(rows.size()), descriptors.cols());
     for (size_t i = 0; i < rows.size(); ++i)
       sample.row(static_cast<Eigen::Index>(i)) = descriptors.row(rows[i]);
-    parts.push_back(PrepareDescriptors(sample));
+    parts.push_back(ToUnitRows(sample));
     num_rows += sample.rows();
     dimension = std::max(dimension, sample.cols());
   }
   VocabularyTree::RowMatrixXf training(num_rows, dimension);
   Eigen::Index row = 0;
-  for (const MatchableDescriptors& part : parts) {
-    if (part.values.rows() == 0) continue;
-    training.middleRows(row, part.values.rows()) = part.values;
-    row += part.values.rows();
+  for (const UnitDescriptorRows& part : parts) {
+    if (part.rows() == 0) continue;
+    training.middleRows(row, part.rows()) = part;
+    row += part.rows();
   }
   return training;
 }
@@ -98,8 +98,8 @@ std::vector<ImagePair> SelectRetrievalPairs(const PairSelectionOptions& options,
   const Timer timer;
   RetrievalIndex index(tree.NumWords());
   for (const image_t image_id : image_ids) {
-    const MatchableDescriptors descriptors = PrepareDescriptors(database.ReadDescriptors(image_id));
-    index.AddImage(image_id, tree.Quantize(descriptors.values, options.num_threads));
+    const UnitDescriptorRows descriptors = ToUnitRows(database.ReadDescriptors(image_id));
+    index.AddImage(image_id, tree.Quantize(descriptors, options.num_threads));
   }
   index.Finalize();
   std::vector<ImagePair> pairs = RetrievalPairs(index, image_ids, options.retrieval.num_neighbors);
