@@ -1,13 +1,98 @@
 #include "parallax/util/threading.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <thread>
 #include <vector>
 
 namespace parallax {
+namespace {
+
+// True on a pool thread, and on a caller while the pool runs its task.
+thread_local bool t_in_pool = false;
+
+// Worker threads kept for the life of the process: ParallelFor hands them its loop instead of
+// starting and joining threads on every call (bundle adjustment makes a few calls per
+// iteration, over a thousand in a templeRing run). One caller at a time: a second caller at
+// the same moment, or a call from inside a body, starts threads of its own as before.
+class WorkerPool {
+ public:
+  // Never destroyed: a thread still in a body when the process exits would otherwise be
+  // joined from a static destructor. A forked child starts a new pool (its threads are gone).
+  static WorkerPool& Instance() {
+    static const bool registered = [] {
+      pthread_atfork(nullptr, nullptr, [] { instance_ = new WorkerPool; });
+      return true;
+    }();
+    (void)registered;
+    return *instance_;
+  }
+
+  // Runs task() on `count` pool threads and on the calling thread, and returns once all have
+  // returned. False, with nothing run, when the pool is in use or the caller is in one of its
+  // tasks. `task` must not throw.
+  bool TryRun(int count, const std::function<void()>& task) {
+    if (t_in_pool) return false;
+    std::unique_lock<std::mutex> caller(caller_mutex_, std::try_to_lock);
+    if (!caller.owns_lock()) return false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (; num_threads_ < count; ++num_threads_) {
+        std::thread(&WorkerPool::Loop, this, num_threads_).detach();
+      }
+      task_ = &task;
+      num_wanted_ = count;
+      num_running_ = count;
+      ++generation_;
+    }
+    wake_.notify_all();
+    t_in_pool = true;
+    task();
+    t_in_pool = false;
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [this] { return num_running_ == 0; });
+    task_ = nullptr;
+    return true;
+  }
+
+ private:
+  WorkerPool() = default;
+
+  void Loop(int index) {
+    t_in_pool = true;
+    uint64_t seen = 0;
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return generation_ != seen; });
+      seen = generation_;
+      if (index >= num_wanted_) continue;
+      const std::function<void()>* task = task_;
+      lock.unlock();
+      (*task)();
+      lock.lock();
+      if (--num_running_ == 0) done_.notify_one();
+    }
+  }
+
+  static WorkerPool* instance_;
+  std::mutex caller_mutex_;  // Held by the thread whose loop the pool runs.
+  std::mutex mutex_;         // Guards what follows.
+  std::condition_variable wake_, done_;
+  int num_threads_ = 0;
+  const std::function<void()>* task_ = nullptr;
+  int num_wanted_ = 0;   // Pool threads that run the current task.
+  int num_running_ = 0;  // Of those, the ones not finished.
+  uint64_t generation_ = 0;
+};
+
+WorkerPool* WorkerPool::instance_ = new WorkerPool;
+
+}  // namespace
 
 int EffectiveNumThreads(int requested) {
   if (requested > 0) return requested;
@@ -26,7 +111,7 @@ void ParallelFor(size_t begin, size_t end, int num_threads,
   std::atomic<size_t> next{begin};
   std::exception_ptr first_error;
   std::mutex error_mutex;
-  auto work = [&]() {
+  const std::function<void()> work = [&]() {
     for (size_t i = next++; i < end; i = next++) {
       try {
         body(i);
@@ -37,10 +122,12 @@ void ParallelFor(size_t begin, size_t end, int num_threads,
       }
     }
   };
-  std::vector<std::thread> threads;
-  for (int t = 0; t < workers - 1; ++t) threads.emplace_back(work);
-  work();
-  for (auto& thread : threads) thread.join();
+  if (!WorkerPool::Instance().TryRun(workers - 1, work)) {
+    std::vector<std::thread> threads;
+    for (int t = 0; t < workers - 1; ++t) threads.emplace_back(work);
+    work();
+    for (auto& thread : threads) thread.join();
+  }
   if (first_error) std::rethrow_exception(first_error);
 }
 
