@@ -3,6 +3,7 @@
 #include <sqlite3.h>
 
 #include <Eigen/LU>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <set>
@@ -22,6 +23,8 @@ struct ColumnSpec {
   // Columns that COLMAP itself added by ALTER TABLE in later versions; an older database
   // without them is upgraded as COLMAP does rather than rejected.
   bool added_later = false;
+  // Columns COLMAP 4 no longer has (the images' pose priors moved to its pose_priors table).
+  bool dropped_in_colmap4 = false;
 };
 
 struct TableSpec {
@@ -47,13 +50,13 @@ const std::vector<TableSpec>& ColmapTables() {
        {{"image_id", "INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL"},
         {"name", "TEXT NOT NULL UNIQUE"},
         {"camera_id", "INTEGER NOT NULL"},
-        {"prior_qw", "REAL"},
-        {"prior_qx", "REAL"},
-        {"prior_qy", "REAL"},
-        {"prior_qz", "REAL"},
-        {"prior_tx", "REAL"},
-        {"prior_ty", "REAL"},
-        {"prior_tz", "REAL"}},
+        {"prior_qw", "REAL", false, true},
+        {"prior_qx", "REAL", false, true},
+        {"prior_qy", "REAL", false, true},
+        {"prior_qz", "REAL", false, true},
+        {"prior_tx", "REAL", false, true},
+        {"prior_ty", "REAL", false, true},
+        {"prior_tz", "REAL", false, true}},
        {"CONSTRAINT image_id_check CHECK(image_id >= 0 and image_id < 2147483647)",
         "FOREIGN KEY(camera_id) REFERENCES cameras(camera_id)"}},
       {"keypoints",
@@ -375,10 +378,18 @@ void Exec(sqlite3* db, const std::filesystem::path& path, const std::string& sql
   }
 }
 
+// Whether the file has COLMAP 4's layout: rigs and frames, pose priors in their own table.
+bool HasColmap4Layout(sqlite3* db, const std::filesystem::path& path) {
+  Statement statement(db, path,
+                      "SELECT 1 FROM sqlite_master WHERE type='table' AND name='pose_priors';");
+  return statement.Step();
+}
+
 // Checks the schema against COLMAP's; with `apply`, creates what is missing (tables, the
 // columns COLMAP added later, the name index). Returns true when nothing was missing.
 // Throws InputError when an existing table lacks a column COLMAP always had.
 bool UpgradeSchema(sqlite3* db, const std::filesystem::path& path, bool apply) {
+  const bool colmap4 = HasColmap4Layout(db, path);
   bool complete = true;
   std::set<std::string> existing_tables;
   bool has_name_index = false;
@@ -407,7 +418,7 @@ bool UpgradeSchema(sqlite3* db, const std::filesystem::path& path, bool apply) {
     Statement info(db, path, (std::string("PRAGMA table_info(") + table.name + ");").c_str());
     while (info.Step()) columns.insert(info.Text(1));
     for (const ColumnSpec& column : table.columns) {
-      if (columns.count(column.name) > 0) continue;
+      if (columns.count(column.name) > 0 || (colmap4 && column.dropped_in_colmap4)) continue;
       if (!column.added_later) {
         throw InputError(path.string() + ": not a COLMAP database: table '" + table.name +
                          "' has no column '" + column.name + "'");
@@ -473,6 +484,7 @@ Database::Database(const std::filesystem::path& path) : path_(path) {
       UpgradeSchema(db_, path_, /*apply=*/true);
       transaction.Commit();
     }
+    colmap4_layout_ = HasColmap4Layout(db_, path_);
   } catch (...) {
     sqlite3_close_v2(db_);
     db_ = nullptr;
@@ -501,7 +513,15 @@ void Database::Checkpoint() { Execute("PRAGMA wal_checkpoint(TRUNCATE);"); }
 
 // ----- Cameras ------------------------------------------------------------------------------
 
+void Database::RefuseNewImagesInColmap4Layout() const {
+  if (!colmap4_layout_) return;
+  throw InputError(path_.string() +
+                   ": a COLMAP 4 database; Parallax reads its features and matches (match, "
+                   "mapper) but does not add cameras or images to it: extract into a new database");
+}
+
 camera_t Database::WriteCamera(const Camera& camera, bool use_camera_id) {
+  RefuseNewImagesInColmap4Layout();
   PARALLAX_CHECK_MSG(camera.VerifyParams(), "camera " << camera.camera_id << " has invalid params");
   Statement statement(db_, path_,
                       "INSERT INTO cameras(camera_id, model, width, height, params, "
@@ -563,6 +583,7 @@ std::vector<Camera> Database::ReadAllCameras() const {
 // ----- Images -------------------------------------------------------------------------------
 
 image_t Database::WriteImage(const std::string& name, camera_t camera_id) {
+  RefuseNewImagesInColmap4Layout();
   // Pose priors are left NULL, as COLMAP writes them when unknown.
   Statement statement(db_, path_,
                       "INSERT INTO images(image_id, name, camera_id) VALUES(NULL, ?, ?);");
@@ -661,6 +682,7 @@ void Database::WriteImageGpsPrior(image_t image_id, const GeodeticPosition& posi
 }
 
 std::vector<std::pair<image_t, GeodeticPosition>> Database::ReadImageGpsPriors() const {
+  if (colmap4_layout_) return ReadColmap4GpsPriors();
   Statement statement(db_, path_,
                       "SELECT image_id, prior_tx, prior_ty, prior_tz FROM images WHERE prior_tx IS "
                       "NOT NULL AND prior_ty IS NOT NULL ORDER BY image_id;");
@@ -668,6 +690,26 @@ std::vector<std::pair<image_t, GeodeticPosition>> Database::ReadImageGpsPriors()
   while (statement.Step()) {
     const GeodeticPosition position{statement.Double(1), statement.Double(2), statement.Double(3)};
     priors.emplace_back(static_cast<image_t>(statement.Int64(0)), position);
+  }
+  return priors;
+}
+
+std::vector<std::pair<image_t, GeodeticPosition>> Database::ReadColmap4GpsPriors() const {
+  // COLMAP 4: a camera image's prior (sensor type 0, data id = image id) in WGS84
+  // (coordinate system 0) is latitude, longitude and altitude as three doubles.
+  Statement statement(db_, path_,
+                      "SELECT corr_data_id, position FROM pose_priors WHERE corr_sensor_type = 0 "
+                      "AND coordinate_system = 0 ORDER BY corr_data_id;");
+  std::vector<std::pair<image_t, GeodeticPosition>> priors;
+  while (statement.Step()) {
+    double position[3];
+    // Blob before NumBytes, as SQLite asks.
+    const void* blob = statement.Blob(1);
+    if (blob == nullptr || statement.NumBytes(1) != sizeof(position)) continue;
+    std::memcpy(position, blob, sizeof(position));
+    if (!std::isfinite(position[0]) || !std::isfinite(position[1])) continue;
+    priors.emplace_back(static_cast<image_t>(statement.Int64(0)),
+                        GeodeticPosition{position[0], position[1], position[2]});
   }
   return priors;
 }

@@ -29,6 +29,8 @@ struct ImageFileFingerprint {
 // The feature and match store: SQLite with COLMAP 3.8's schema (tables cameras, images,
 // keypoints, descriptors, matches, two_view_geometries; the same blob layouts and pair_id
 // encoding), so `colmap mapper` reads a Parallax database and Parallax reads COLMAP's.
+// A COLMAP 4 database (rigs and frames, pose priors in their own table) is read, matched and
+// mapped as it is; adding cameras or images to one is refused (InputError).
 // Every write is one transaction, so a run killed at any moment leaves a valid database.
 // Not thread-safe: one Database per thread, or serialise access.
 class Database {
@@ -116,8 +118,11 @@ class Database {
 
  private:
   void Execute(const std::string& sql) const;
+  void RefuseNewImagesInColmap4Layout() const;
+  std::vector<std::pair<image_t, GeodeticPosition>> ReadColmap4GpsPriors() const;
   std::filesystem::path path_;
   sqlite3* db_ = nullptr;
+  bool colmap4_layout_ = false;
 };
 
 }  // namespace parallax

@@ -657,6 +657,91 @@ TEST_F(DatabaseTest, ReadsOlderColmapLayouts) {
   EXPECT_EQ(database.ReadTwoViewGeometry(1, 3).inlier_matches.size(), 3u);
 }
 
+// A database as COLMAP 4 writes it: rigs and frames, no pose priors in images (they are in
+// pose_priors), a descriptor type column, camera blobs in two_view_geometries.
+TEST_F(DatabaseTest, ReadsAndMatchesColmap4Layout) {
+  {
+    RawDatabase raw(path_);
+    raw.Exec(
+        "CREATE TABLE rigs (rig_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, ref_sensor_id "
+        "INTEGER NOT NULL, ref_sensor_type INTEGER NOT NULL);"
+        "CREATE TABLE frames (frame_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, rig_id INTEGER "
+        "NOT NULL);"
+        "CREATE TABLE frame_data (frame_id INTEGER NOT NULL, data_id INTEGER NOT NULL, sensor_id "
+        "INTEGER NOT NULL, sensor_type INTEGER NOT NULL);"
+        "CREATE TABLE cameras (camera_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, model "
+        "INTEGER NOT NULL, width INTEGER NOT NULL, height INTEGER NOT NULL, params BLOB, "
+        "prior_focal_length INTEGER NOT NULL);"
+        "CREATE TABLE images (image_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, name TEXT NOT "
+        "NULL UNIQUE, camera_id INTEGER NOT NULL);"
+        "CREATE TABLE pose_priors (pose_prior_id INTEGER PRIMARY KEY NOT NULL, corr_data_id "
+        "INTEGER NOT NULL, corr_sensor_id INTEGER NOT NULL, corr_sensor_type INTEGER NOT NULL, "
+        "position BLOB, position_covariance BLOB, gravity BLOB, coordinate_system INTEGER NOT "
+        "NULL);"
+        "CREATE TABLE keypoints (image_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT NULL, "
+        "cols INTEGER NOT NULL, data BLOB);"
+        "CREATE TABLE descriptors (image_id INTEGER PRIMARY KEY NOT NULL, type INTEGER NOT NULL, "
+        "rows INTEGER NOT NULL, cols INTEGER NOT NULL, data BLOB);"
+        "CREATE TABLE matches (pair_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT NULL, cols "
+        "INTEGER NOT NULL, data BLOB);"
+        "CREATE TABLE two_view_geometries (pair_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT "
+        "NULL, cols INTEGER NOT NULL, data BLOB, config INTEGER NOT NULL, F BLOB, E BLOB, H BLOB, "
+        "qvec BLOB, tvec BLOB, camera1 BLOB, camera2 BLOB);"
+        "INSERT INTO cameras VALUES (1, 1, 64, 48, x'', 1);"
+        "INSERT INTO images VALUES (1, 'a.png', 1), (2, 'b.png', 1), (3, 'c.png', 1);"
+        "INSERT INTO descriptors VALUES (1, 0, 1, 4, x'01020304');");
+    // Image 1 in WGS84, image 2 in a local Cartesian frame (not a GPS position).
+    const double wgs84[3] = {46.5, 6.5, 400.0}, cartesian[3] = {1.0, 2.0, 3.0};
+    for (const auto& [image_id, position, system] :
+         {std::tuple{1, wgs84, 0}, std::tuple{2, cartesian, 1}}) {
+      sqlite3_stmt* stmt = nullptr;
+      ASSERT_EQ(sqlite3_prepare_v2(raw.db(),
+                                   "INSERT INTO pose_priors VALUES (?1, ?1, 1, 0, ?2, NULL, NULL, "
+                                   "?3);",
+                                   -1, &stmt, nullptr),
+                SQLITE_OK);
+      sqlite3_bind_int(stmt, 1, image_id);
+      sqlite3_bind_blob(stmt, 2, position, 3 * sizeof(double), SQLITE_STATIC);
+      sqlite3_bind_int(stmt, 3, system);
+      ASSERT_EQ(sqlite3_step(stmt), SQLITE_DONE);
+      sqlite3_finalize(stmt);
+    }
+  }
+  {
+    Database database(path_);
+    EXPECT_EQ(database.ReadAllImages().size(), 3u);
+    EXPECT_EQ(database.ReadDescriptors(1), (FeatureDescriptors(1, 4) << 1, 2, 3, 4).finished());
+    const auto priors = database.ReadImageGpsPriors();
+    ASSERT_EQ(priors.size(), 1u);
+    EXPECT_EQ(priors[0].first, 1u);
+    EXPECT_EQ(priors[0].second.latitude, 46.5);
+    EXPECT_EQ(priors[0].second.longitude, 6.5);
+    EXPECT_EQ(priors[0].second.altitude, 400.0);
+    // Matching writes its results; the geometry reads back.
+    database.WriteTwoViewGeometry(1, 2, RandomGeometry(5));
+    EXPECT_EQ(database.ReadTwoViewGeometry(1, 2).inlier_matches.size(), 5u);
+    // New cameras and images would need COLMAP 4's rigs and frames: refused in one line.
+    try {
+      database.WriteImage("d.png", 1);
+      ADD_FAILURE() << "a COLMAP 4 database took a new image";
+    } catch (const InputError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(path_.string()), std::string::npos) << message;
+      EXPECT_NE(message.find("COLMAP 4"), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+    EXPECT_THROW(database.WriteCamera(
+                     Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48)),
+                 InputError);
+  }
+  // Opening it changed none of COLMAP 4's tables: images has no pose prior columns.
+  RawDatabase raw(path_);
+  for (const auto& column : raw.Query("SELECT name FROM pragma_table_info('images');")) {
+    EXPECT_EQ(column[0].rfind("prior_", 0), std::string::npos) << column[0];
+  }
+  EXPECT_EQ(raw.Query("SELECT COUNT(*) FROM images;")[0][0], "3");
+}
+
 // A writer killed at a random moment leaves a valid database with only complete images.
 TEST_F(DatabaseTest, SurvivesKilledWriter) {
   int ready[2];
