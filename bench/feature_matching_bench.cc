@@ -224,7 +224,8 @@ void BM_SimilarityKernel(benchmark::State& state) {
   PackedSimilarityColumns a_packed;
   PackSimilarityColumns(a.bytes.data(), a.scales.data(), kNum, 128, kernel, &a_packed);
   for (auto _ : state) {
-    ComputeSimilarities(a_packed, b.bytes.data(), b.scales.data(), kNum, out.data());
+    ComputeSimilarities(a_packed, {b.bytes.data(), b.scales.data(), b.sums.data(), kNum},
+                        out.data());
     benchmark::DoNotOptimize(out.data());
   }
   state.counters["GFLOP/s"] = benchmark::Counter(2.0 * kNum * kNum * 128 * state.iterations() / 1e9,

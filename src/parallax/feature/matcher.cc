@@ -123,12 +123,15 @@ MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors) {
   MatchableDescriptors matchable;
   matchable.bytes = descriptors;
   matchable.scales.resize(static_cast<size_t>(descriptors.rows()));
+  matchable.sums.resize(static_cast<size_t>(descriptors.rows()));
   for (Eigen::Index row = 0; row < descriptors.rows(); ++row) {
     // The integer sum of squares is exact, and so is its conversion (below 2^24 for 128 bytes).
-    int32_t sum_of_squares = 0;
+    int32_t sum = 0, sum_of_squares = 0;
     for (Eigen::Index k = 0; k < descriptors.cols(); ++k) {
+      sum += descriptors(row, k);
       sum_of_squares += int32_t{descriptors(row, k)} * descriptors(row, k);
     }
+    matchable.sums[row] = sum;
     // An all-zero row gets scale 0: similarity 0, distance sqrt(2) to everything, never matched.
     matchable.scales[row] =
         sum_of_squares > 0 ? 1.0f / std::sqrt(static_cast<float>(sum_of_squares)) : 0.0f;
@@ -155,6 +158,7 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
   const int num2 = descriptors2.NumRows();
   PARALLAX_CHECK_EQ(descriptors1.scales.size(), static_cast<size_t>(num1));
   PARALLAX_CHECK_EQ(descriptors2.scales.size(), static_cast<size_t>(num2));
+  PARALLAX_CHECK_EQ(descriptors2.sums.size(), static_cast<size_t>(num2));
   if (num1 == 0 || num2 == 0) return {};
   PARALLAX_CHECK_EQ(bytes1.cols(), bytes2.cols());
 
@@ -193,8 +197,9 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
     std::vector<float> tile(static_cast<size_t>(kColBlock) * stride);
     for (int c0 = 0; c0 < num2; c0 += kColBlock) {
       const int num_rows2 = std::min(kColBlock, num2 - c0);
-      ComputeSimilarities(block1, bytes2.row(c0).data(), descriptors2.scales.data() + c0, num_rows2,
-                          tile.data());
+      const SimilarityRows rows2{bytes2.row(c0).data(), descriptors2.scales.data() + c0,
+                                 descriptors2.sums.data() + c0, num_rows2};
+      ComputeSimilarities(block1, rows2, tile.data());
       const size_t col_offset = block * static_cast<size_t>(num2) + c0;
       ScanTile(tile.data(), num_rows2, num_rows1, stride, c0, rows.best.data() + r0,
                rows.second.data() + r0, rows.best_index.data() + r0,

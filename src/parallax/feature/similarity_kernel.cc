@@ -146,25 +146,20 @@ __attribute__((target("avx512f,avx512vnni"))) inline void TileAvx512Vnni(
 }
 
 __attribute__((target("avx512f,avx512vnni"))) void SimilaritiesAvx512Vnni(
-    const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales, int num_b,
-    float* similarities) {
+    const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
+    const int32_t* b_sums, int num_b, float* similarities) {
   const int dim = a.dim;
-  thread_local std::vector<int32_t> b_sums;
-  b_sums.assign(num_b, 0);
-  for (int j = 0; j < num_b; ++j) {
-    for (int k = 0; k < dim; ++k) b_sums[j] += b[static_cast<ptrdiff_t>(j) * dim + k];
-  }
   for (int i0 = 0; i0 < a.num_columns; i0 += kPanel) {
     const int8_t* panel = a.quads.data() + PackedIndex(i0, 0, 4, dim);
     int j = 0;
     for (; j + kRowsPerTile <= num_b; j += kRowsPerTile) {
-      TileAvx512Vnni<kRowsPerTile>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums.data() + j,
+      TileAvx512Vnni<kRowsPerTile>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums + j,
                                    b_scales + j, dim, a.scales.data() + i0, a.num_columns,
                                    similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
     for (; j < num_b; ++j) {
-      TileAvx512Vnni<1>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums.data() + j, b_scales + j,
-                        dim, a.scales.data() + i0, a.num_columns,
+      TileAvx512Vnni<1>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums + j, b_scales + j, dim,
+                        a.scales.data() + i0, a.num_columns,
                         similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
   }
@@ -230,14 +225,17 @@ SimilarityKernel BestSimilarityKernel() {
   return best;
 }
 
-void ComputeSimilarities(const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
-                         int num_b, float* similarities) {
+void ComputeSimilarities(const PackedSimilarityColumns& a, const SimilarityRows& rows,
+                         float* similarities) {
+  const uint8_t* b = rows.bytes;
+  const float* b_scales = rows.scales;
+  const int num_b = rows.num_rows;
   PARALLAX_CHECK_EQ(a.num_columns % kPanel, 0);
   PARALLAX_CHECK(SimilarityKernelAvailable(a.kernel));
   switch (a.kernel) {
 #if defined(PARALLAX_SIMILARITY_SIMD)
     case SimilarityKernel::kAvx512Vnni:
-      return SimilaritiesAvx512Vnni(a, b, b_scales, num_b, similarities);
+      return SimilaritiesAvx512Vnni(a, b, b_scales, rows.sums, num_b, similarities);
     case SimilarityKernel::kAvx2:
       return SimilaritiesAvx2(a, b, b_scales, num_b, similarities);
 #endif

@@ -40,10 +40,18 @@ struct PackedSimilarityColumns {
 void PackSimilarityColumns(const uint8_t* a, const float* a_scales, int num_a, int dim,
                            SimilarityKernel kernel, PackedSimilarityColumns* packed);
 
-// similarities[j * a.num_columns + i] = float(b[j] . a[i]) * a.scales[i] * b_scales[j] for
-// j < num_b and every column i of a (0 for the padding), with b holding num_b descriptors of
-// a.dim bytes as rows. Runs a's kernel.
-void ComputeSimilarities(const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
-                         int num_b, float* similarities);
+// Image 2's side of the product: num_rows descriptors of `dim` bytes as rows, each with its
+// scale (1 / norm) and the sum of its bytes (which the VNNI kernel adds back, times 128).
+struct SimilarityRows {
+  const uint8_t* bytes = nullptr;
+  const float* scales = nullptr;
+  const int32_t* sums = nullptr;
+  int num_rows = 0;
+};
+
+// similarities[j * a.num_columns + i] = float(b[j] . a[i]) * a.scales[i] * b.scales[j] for
+// j < b.num_rows and every column i of a (0 for the padding). Runs a's kernel.
+void ComputeSimilarities(const PackedSimilarityColumns& a, const SimilarityRows& b,
+                         float* similarities);
 
 }  // namespace parallax

@@ -19,6 +19,7 @@ struct Blocks {
   std::vector<float> a_scales;
   std::vector<uint8_t> b;  // num_b x kDim.
   std::vector<float> b_scales;
+  std::vector<int32_t> b_sums;
 };
 
 // Bytes over their whole range, the extremes often (0 and 255 test the 16-bit and signed-byte
@@ -40,7 +41,12 @@ Blocks RandomBlocks(int num_a, int num_b) {
   blocks.a = RandomBytes(num_a);
   blocks.b = RandomBytes(num_b);
   for (int i = 0; i < num_a; ++i) blocks.a_scales.push_back(RandomUniformReal(1e-4f, 1e-2f));
-  for (int j = 0; j < num_b; ++j) blocks.b_scales.push_back(RandomUniformReal(1e-4f, 1e-2f));
+  for (int j = 0; j < num_b; ++j) {
+    blocks.b_scales.push_back(RandomUniformReal(1e-4f, 1e-2f));
+    int32_t sum = 0;
+    for (int k = 0; k < kDim; ++k) sum += blocks.b[j * kDim + k];
+    blocks.b_sums.push_back(sum);
+  }
   return blocks;
 }
 
@@ -50,7 +56,9 @@ std::vector<float> Similarities(const Blocks& blocks, SimilarityKernel kernel, i
                         &packed);
   *num_columns = packed.num_columns;
   std::vector<float> out(static_cast<size_t>(blocks.num_b) * packed.num_columns, -1.0f);
-  ComputeSimilarities(packed, blocks.b.data(), blocks.b_scales.data(), blocks.num_b, out.data());
+  ComputeSimilarities(packed,
+                      {blocks.b.data(), blocks.b_scales.data(), blocks.b_sums.data(), blocks.num_b},
+                      out.data());
   return out;
 }
 

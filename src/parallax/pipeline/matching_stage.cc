@@ -68,9 +68,11 @@ MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
   MatchableDescriptors largest;
   largest.bytes.resize(static_cast<Eigen::Index>(keep), descriptors.bytes.cols());
   largest.scales.resize(keep);
+  largest.sums.resize(keep);
   for (size_t k = 0; k < keep; ++k) {
     largest.bytes.row(static_cast<Eigen::Index>(k)) = descriptors.bytes.row(order[k]);
     largest.scales[k] = descriptors.scales[order[k]];
+    largest.sums[k] = descriptors.sums[order[k]];
   }
   return largest;
 }
