@@ -32,70 +32,115 @@ struct BestTwo {
   std::vector<int> best_index;
 };
 
-// The maximum of row[0, n) and the first index where it occurs (n > 0). Eight lanes keep
-// their first maximum; across lanes the smallest index wins a tie, so the result is what a
-// sequential scan finds.
+// The maximum of row[0, n) and the first index where it occurs (-1 when n is 0): the maximum
+// first, with four independent vector maxima, then the first position that equals it (ties
+// go to the smallest index, as a sequential scan finds).
 void RowMax(const float* row, int n, float* max_value, int* max_index) {
-  constexpr int kLanes = 8;
-  float lane_best[kLanes];
-  int lane_index[kLanes];
+  float maximum = kMinusInfinity;
   int i = 0;
 #if defined(__AVX2__)
-  // gcc does not vectorise the arg-max; AVX2 does 8 compares and 2 blends per step.
-  __m256 best = _mm256_set1_ps(kMinusInfinity);
-  __m256i best_index = _mm256_set1_epi32(-1);
-  __m256i index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256i step = _mm256_set1_epi32(kLanes);
-  for (; i + kLanes <= n; i += kLanes) {
-    const __m256 value = _mm256_loadu_ps(row + i);
-    const __m256 above = _mm256_cmp_ps(value, best, _CMP_GT_OQ);
-    best = _mm256_blendv_ps(best, value, above);
-    best_index = _mm256_blendv_epi8(best_index, index, _mm256_castps_si256(above));
-    index = _mm256_add_epi32(index, step);
+  // gcc does not vectorise either reduction.
+  constexpr int kLanes = 8;
+  __m256 max0 = _mm256_set1_ps(kMinusInfinity), max1 = max0, max2 = max0, max3 = max0;
+  for (; i + 4 * kLanes <= n; i += 4 * kLanes) {
+    max0 = _mm256_max_ps(max0, _mm256_loadu_ps(row + i));
+    max1 = _mm256_max_ps(max1, _mm256_loadu_ps(row + i + kLanes));
+    max2 = _mm256_max_ps(max2, _mm256_loadu_ps(row + i + 2 * kLanes));
+    max3 = _mm256_max_ps(max3, _mm256_loadu_ps(row + i + 3 * kLanes));
   }
-  _mm256_storeu_ps(lane_best, best);
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_index), best_index);
-#else
-  std::fill_n(lane_best, kLanes, kMinusInfinity);
-  std::fill_n(lane_index, kLanes, -1);
+  for (; i + kLanes <= n; i += kLanes) max0 = _mm256_max_ps(max0, _mm256_loadu_ps(row + i));
+  alignas(32) float lanes[kLanes];
+  _mm256_store_ps(lanes, _mm256_max_ps(_mm256_max_ps(max0, max1), _mm256_max_ps(max2, max3)));
+  for (const float lane : lanes) maximum = std::max(maximum, lane);
 #endif
-  for (; i < n; ++i) {
-    const int lane = i % kLanes;
-    if (row[i] > lane_best[lane]) {
-      lane_best[lane] = row[i];
-      lane_index[lane] = i;
+  for (; i < n; ++i) maximum = std::max(maximum, row[i]);
+  *max_value = maximum;
+  *max_index = -1;
+  int k = 0;
+#if defined(__AVX2__)
+  const __m256 target = _mm256_set1_ps(maximum);
+  for (; k + kLanes <= n; k += kLanes) {
+    const int equal =
+        _mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(row + k), target, _CMP_EQ_OQ));
+    if (equal != 0) {
+      *max_index = k + __builtin_ctz(static_cast<unsigned>(equal));
+      return;
     }
   }
-  *max_value = kMinusInfinity;
-  *max_index = -1;
-  for (int lane = 0; lane < kLanes; ++lane) {
-    if (lane_index[lane] < 0) continue;
-    if (*max_index < 0 || lane_best[lane] > *max_value ||
-        (lane_best[lane] == *max_value && lane_index[lane] < *max_index)) {
-      *max_value = lane_best[lane];
-      *max_index = lane_index[lane];
+#endif
+  for (; k < n; ++k) {
+    if (row[k] == maximum) {
+      *max_index = k;
+      return;
+    }
+  }
+}
+
+// One value of column i, row index2 (rows in increasing order), into the column's running
+// best, second best and index of the best.
+inline void TopTwoStep(float value, int index2, float* best, float* second, int* best_index) {
+  const bool above_best = value > *best;
+  const bool above_second = value > *second;
+  *second = above_best ? *best : (above_second ? value : *second);
+  *best = above_best ? value : *best;
+  *best_index = above_best ? index2 : *best_index;
+}
+
+#if defined(__AVX2__)
+// The same for 8 columns at once.
+inline void TopTwoStep(__m256 value, __m256i index2, __m256* best, __m256* second,
+                       __m256i* best_index) {
+  const __m256 above_best = _mm256_cmp_ps(value, *best, _CMP_GT_OQ);
+  const __m256 above_second = _mm256_cmp_ps(value, *second, _CMP_GT_OQ);
+  *second = _mm256_blendv_ps(_mm256_blendv_ps(*second, value, above_second), *best, above_best);
+  *best = _mm256_blendv_ps(*best, value, above_best);
+  *best_index = _mm256_blendv_epi8(*best_index, index2, _mm256_castps_si256(above_best));
+}
+#endif
+
+// The running top-2 of each column i < num_cols over the tile's rows (rows c0, c0 + 1, ... of
+// image 2). Blocks of 16 columns walk all rows with their state in registers: one load per
+// 8 values instead of four loads and three stores.
+void UpdateTopTwo(const float* tile, int num_rows, int num_cols, int stride, int c0, float* best,
+                  float* second, int* best_index) {
+  int i = 0;
+#if defined(__AVX2__)
+  for (; i + 16 <= num_cols; i += 16) {
+    __m256 best0 = _mm256_loadu_ps(best + i), best1 = _mm256_loadu_ps(best + i + 8);
+    __m256 second0 = _mm256_loadu_ps(second + i), second1 = _mm256_loadu_ps(second + i + 8);
+    __m256i index0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(best_index + i));
+    __m256i index1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(best_index + i + 8));
+    for (int j = 0; j < num_rows; ++j) {
+      const float* row = tile + static_cast<ptrdiff_t>(j) * stride + i;
+      const __m256i index2 = _mm256_set1_epi32(c0 + j);
+      TopTwoStep(_mm256_loadu_ps(row), index2, &best0, &second0, &index0);
+      TopTwoStep(_mm256_loadu_ps(row + 8), index2, &best1, &second1, &index1);
+    }
+    _mm256_storeu_ps(best + i, best0);
+    _mm256_storeu_ps(best + i + 8, best1);
+    _mm256_storeu_ps(second + i, second0);
+    _mm256_storeu_ps(second + i + 8, second1);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(best_index + i), index0);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(best_index + i + 8), index1);
+  }
+#endif
+  for (; i < num_cols; ++i) {
+    for (int j = 0; j < num_rows; ++j) {
+      TopTwoStep(tile[static_cast<ptrdiff_t>(j) * stride + i], c0 + j, best + i, second + i,
+                 best_index + i);
     }
   }
 }
 
 // tile(j, i) = tile[j * stride + i] = descriptors2[c0 + j] . descriptors1[r0 + i] for
-// i < num_cols. Columns i are contiguous, so the running top-2 per i is an element-wise
-// update over each row (vectorises), and the best i per j (the cross-check) is a reduction
-// along the row.
+// i < num_cols: the running top-2 per i (UpdateTopTwo), and the best i per j (the
+// cross-check) as a reduction along each row.
 void ScanTile(const float* tile, int num_rows, int num_cols, int stride, int c0, float* best,
               float* second, int* best_index, float* col_best, int* col_best_index, int r0) {
+  UpdateTopTwo(tile, num_rows, num_cols, stride, c0, best, second, best_index);
+  if (col_best == nullptr) return;
   for (int j = 0; j < num_rows; ++j) {
     const float* row = tile + static_cast<ptrdiff_t>(j) * stride;
-    const int index2 = c0 + j;
-    for (int i = 0; i < num_cols; ++i) {
-      const float value = row[i];
-      const bool above_best = value > best[i];
-      const bool above_second = value > second[i];
-      second[i] = above_best ? best[i] : (above_second ? value : second[i]);
-      best[i] = above_best ? value : best[i];
-      best_index[i] = above_best ? index2 : best_index[i];
-    }
-    if (col_best == nullptr) continue;
     float lanes_max;
     int first;
     RowMax(row, num_cols, &lanes_max, &first);
