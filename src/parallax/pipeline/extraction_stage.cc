@@ -1,6 +1,5 @@
 #include "parallax/pipeline/extraction_stage.h"
 
-#include <chrono>
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
@@ -61,22 +60,18 @@ std::optional<GeodeticPosition> GpsPosition(const std::optional<ExifData>& exif)
 }
 
 // Size and modification time of the file as it is now (no digest).
-ImageFileFingerprint StatImageFile(const std::filesystem::path& path) {
-  std::error_code error;
-  ImageFileFingerprint fingerprint;
-  fingerprint.size = static_cast<uint64_t>(std::filesystem::file_size(path, error));
-  if (error) throw InputError(path.string() + ": cannot read the file size: " + error.message());
-  const auto mtime = std::filesystem::last_write_time(path, error);
-  if (error) throw InputError(path.string() + ": cannot read the modification time");
-  fingerprint.mtime_ns =
-      std::chrono::duration_cast<std::chrono::nanoseconds>(mtime.time_since_epoch()).count();
-  return fingerprint;
+ImageFileFingerprint StatImageFileOrThrow(const std::filesystem::path& path) {
+  const std::optional<ImageFileFingerprint> fingerprint = StatImageFile(path);
+  if (!fingerprint) {
+    throw InputError(path.string() + ": cannot read the file's size or modification time");
+  }
+  return *fingerprint;
 }
 
 // The fingerprint with its digest; adds the time spent to `*hash_seconds`.
 ImageFileFingerprint FingerprintImageFile(const std::filesystem::path& path, double* hash_seconds) {
   const Timer timer;
-  ImageFileFingerprint fingerprint = StatImageFile(path);
+  ImageFileFingerprint fingerprint = StatImageFileOrThrow(path);
   fingerprint.content_hash = HashFile(path);
   *hash_seconds += timer.ElapsedSeconds();
   return fingerprint;
@@ -89,7 +84,7 @@ ImageFileFingerprint FingerprintImageFile(const std::filesystem::path& path, dou
 bool StoredFeaturesAreCurrent(image_t image_id, const std::filesystem::path& path,
                               Database* database, ExtractionStageResult* stats) {
   const std::optional<ImageFileFingerprint> stored = database->ReadImageFileFingerprint(image_id);
-  const ImageFileFingerprint now = StatImageFile(path);
+  const ImageFileFingerprint now = StatImageFileOrThrow(path);
   if (stored && stored->size == now.size && stored->mtime_ns == now.mtime_ns) return true;
   const ImageFileFingerprint hashed = FingerprintImageFile(path, &stats->hash_thread_seconds);
   if (stored && stored->content_hash != hashed.content_hash) return false;

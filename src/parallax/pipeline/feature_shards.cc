@@ -30,14 +30,24 @@ const FeatureShardIndex::Entry* FeatureShardIndex::CurrentEntry(
     const std::filesystem::path& path) const {
   const auto entry = entries_.find(path.filename().string());
   if (entry == entries_.end()) return nullptr;
-  std::error_code error;
-  const uint64_t size = static_cast<uint64_t>(std::filesystem::file_size(path, error));
-  if (error || size != entry->second.fingerprint.size) return nullptr;
-  const auto mtime = std::filesystem::last_write_time(path, error);
-  const int64_t mtime_ns =
-      std::chrono::duration_cast<std::chrono::nanoseconds>(mtime.time_since_epoch()).count();
-  if (error || mtime_ns != entry->second.fingerprint.mtime_ns) return nullptr;
+  const std::optional<ImageFileFingerprint> now = StatImageFile(path);
+  if (!now || now->size != entry->second.fingerprint.size ||
+      now->mtime_ns != entry->second.fingerprint.mtime_ns) {
+    return nullptr;
+  }
   return &entry->second;
+}
+
+std::optional<ImageFileFingerprint> StatImageFile(const std::filesystem::path& path) {
+  std::error_code error;
+  ImageFileFingerprint fingerprint;
+  fingerprint.size = static_cast<uint64_t>(std::filesystem::file_size(path, error));
+  if (error) return std::nullopt;
+  const auto mtime = std::filesystem::last_write_time(path, error);
+  if (error) return std::nullopt;
+  fingerprint.mtime_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(mtime.time_since_epoch()).count();
+  return fingerprint;
 }
 
 bool FeatureShardIndex::Holds(const std::filesystem::path& path) const {

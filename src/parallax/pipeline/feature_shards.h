@@ -52,6 +52,11 @@ class FeatureShardIndex {
   mutable std::mutex mutex_;  // SQLite connections are used by one thread at a time.
 };
 
+// The size and modification time of the file at `path` as it is now (no digest); nullopt when
+// either cannot be read. What the shard index and the extraction stage compare with the
+// stored fingerprints.
+std::optional<ImageFileFingerprint> StatImageFile(const std::filesystem::path& path);
+
 // The shard databases in `dir` (rank-*.db), sorted by name.
 std::vector<std::filesystem::path> ListShardDatabases(const std::filesystem::path& dir);
 
