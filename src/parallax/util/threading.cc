@@ -26,11 +26,11 @@ class WorkerPool {
   // joined from a static destructor. A forked child starts a new pool (its threads are gone).
   static WorkerPool& Instance() {
     static const bool registered = [] {
-      pthread_atfork(nullptr, nullptr, [] { instance_ = new WorkerPool; });
+      pthread_atfork(nullptr, nullptr, [] { Pointer() = new WorkerPool; });
       return true;
     }();
     (void)registered;
-    return *instance_;
+    return *Pointer();
   }
 
   // Runs task() on `count` pool threads and on the calling thread, and returns once all have
@@ -79,7 +79,11 @@ class WorkerPool {
     }
   }
 
-  static WorkerPool* instance_;
+  // Made on first use, so that no static initialiser elsewhere can find it unmade.
+  static WorkerPool*& Pointer() {
+    static WorkerPool* pool = new WorkerPool;
+    return pool;
+  }
   std::mutex caller_mutex_;  // Held by the thread whose loop the pool runs.
   std::mutex mutex_;         // Guards what follows.
   std::condition_variable wake_, done_;
@@ -89,8 +93,6 @@ class WorkerPool {
   int num_running_ = 0;  // Of those, the ones not finished.
   uint64_t generation_ = 0;
 };
-
-WorkerPool* WorkerPool::instance_ = new WorkerPool;
 
 }  // namespace
 
