@@ -19,7 +19,7 @@ struct FeatureMatchingOptions {
 struct MatchableDescriptors {
   FeatureDescriptors bytes;   // N x 128, as stored.
   std::vector<float> scales;  // 1 / norm per row (0 for an all-zero row).
-  std::vector<int32_t> sums;  // Sum of each row\'s bytes (SimilarityRows).
+  std::vector<int32_t> sums;  // Sum of each row's bytes (SimilarityRows).
   int NumRows() const { return static_cast<int>(bytes.rows()); }
 };
 MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors);

@@ -24,6 +24,20 @@ inline ptrdiff_t PackedIndex(int column, int k, int group, int dim) {
          k % group;
 }
 
+// The num_a rows of a (each value minus `offset`) in panels of num_columns columns grouped by
+// `group` dimensions; the padding columns are 0.
+template <typename T>
+void PackGroups(const uint8_t* a, int num_a, int num_columns, int dim, int group, int offset,
+                std::vector<T>* values) {
+  values->assign(static_cast<size_t>(num_columns) * dim, T{0});
+  for (int i = 0; i < num_a; ++i) {
+    for (int k = 0; k < dim; ++k) {
+      (*values)[PackedIndex(i, k, group, dim)] =
+          static_cast<T>(a[static_cast<ptrdiff_t>(i) * dim + k] - offset);
+    }
+  }
+}
+
 // float(dot) * scale_a * scale_b, in that order in every kernel.
 inline float Similarity(int32_t dot, float scale_a, float scale_b) {
   return static_cast<float>(dot) * scale_a * scale_b;
@@ -177,24 +191,12 @@ void PackSimilarityColumns(const uint8_t* a, const float* a_scales, int num_a, i
   packed->num_columns = (num_a + kPanel - 1) / kPanel * kPanel;
   packed->scales.assign(packed->num_columns, 0.0f);
   std::copy(a_scales, a_scales + num_a, packed->scales.begin());
-  const size_t size = static_cast<size_t>(packed->num_columns) * dim;
   if (kernel == SimilarityKernel::kAvx512Vnni) {
     packed->pairs.clear();
-    packed->quads.assign(size, 0);
-    for (int i = 0; i < num_a; ++i) {
-      for (int k = 0; k < dim; ++k) {
-        packed->quads[PackedIndex(i, k, 4, dim)] =
-            static_cast<int8_t>(a[static_cast<ptrdiff_t>(i) * dim + k] - 128);
-      }
-    }
+    PackGroups(a, num_a, packed->num_columns, dim, 4, 128, &packed->quads);
   } else {
     packed->quads.clear();
-    packed->pairs.assign(size, 0);
-    for (int i = 0; i < num_a; ++i) {
-      for (int k = 0; k < dim; ++k) {
-        packed->pairs[PackedIndex(i, k, 2, dim)] = a[static_cast<ptrdiff_t>(i) * dim + k];
-      }
-    }
+    PackGroups(a, num_a, packed->num_columns, dim, 2, 0, &packed->pairs);
   }
 }
 

@@ -65,16 +65,11 @@ MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
     const float scale_a = keypoints[a].ComputeScale(), scale_b = keypoints[b].ComputeScale();
     return scale_a != scale_b ? scale_a > scale_b : a < b;
   });
-  MatchableDescriptors largest;
-  largest.bytes.resize(static_cast<Eigen::Index>(keep), descriptors.bytes.cols());
-  largest.scales.resize(keep);
-  largest.sums.resize(keep);
+  FeatureDescriptors largest(static_cast<Eigen::Index>(keep), descriptors.bytes.cols());
   for (size_t k = 0; k < keep; ++k) {
-    largest.bytes.row(static_cast<Eigen::Index>(k)) = descriptors.bytes.row(order[k]);
-    largest.scales[k] = descriptors.scales[order[k]];
-    largest.sums[k] = descriptors.sums[order[k]];
+    largest.row(static_cast<Eigen::Index>(k)) = descriptors.bytes.row(order[k]);
   }
-  return largest;
+  return PrepareDescriptors(largest);
 }
 
 }  // namespace
