@@ -283,15 +283,17 @@ FeatureMatches MatchesFromRow(const Statement& statement, int column, bool swap,
   return matches;
 }
 
-// A fixed-size double blob (F, E, H row-major; qvec; tvec). COLMAP writes empty blobs for
-// pairs without inliers: those read as nullopt.
+// A fixed-size double blob (F, E, H row-major; qvec; tvec; a pose prior's position), named
+// `what` in the error. COLMAP writes empty blobs (pairs without inliers) and NULLs: those
+// read as nullopt.
 template <int kSize>
 std::optional<Eigen::Matrix<double, kSize, 1>> ReadDoubles(const Statement& statement, int column,
-                                                           const std::filesystem::path& path) {
+                                                           const std::filesystem::path& path,
+                                                           const char* what = "two-view geometry") {
   const size_t num_bytes = statement.NumBytes(column);
   if (num_bytes == 0) return std::nullopt;
   if (num_bytes != kSize * sizeof(double)) {
-    throw InputError(path.string() + ": malformed two-view geometry blob of " +
+    throw InputError(path.string() + ": malformed " + what + " blob of " +
                      std::to_string(num_bytes) + " bytes (expected " +
                      std::to_string(kSize * sizeof(double)) + ")");
   }
@@ -388,8 +390,8 @@ bool HasColmap4Layout(sqlite3* db, const std::filesystem::path& path) {
 // Checks the schema against COLMAP's; with `apply`, creates what is missing (tables, the
 // columns COLMAP added later, the name index). Returns true when nothing was missing.
 // Throws InputError when an existing table lacks a column COLMAP always had.
-bool UpgradeSchema(sqlite3* db, const std::filesystem::path& path, bool apply) {
-  const bool colmap4 = HasColmap4Layout(db, path);
+// `colmap4`: the file has COLMAP 4's layout (HasColmap4Layout).
+bool UpgradeSchema(sqlite3* db, const std::filesystem::path& path, bool colmap4, bool apply) {
   bool complete = true;
   std::set<std::string> existing_tables;
   bool has_name_index = false;
@@ -479,12 +481,13 @@ Database::Database(const std::filesystem::path& path) : path_(path) {
 
     // Check first and write only when something is missing, so that opening a database
     // that another connection is writing to does not wait for its lock.
-    if (!UpgradeSchema(db_, path_, /*apply=*/false)) {
+    // The upgrade never adds COLMAP 4's tables, so the layout is known before it.
+    colmap4_layout_ = HasColmap4Layout(db_, path_);
+    if (!UpgradeSchema(db_, path_, colmap4_layout_, /*apply=*/false)) {
       ScopedTransaction transaction(db_, path_);
-      UpgradeSchema(db_, path_, /*apply=*/true);
+      UpgradeSchema(db_, path_, colmap4_layout_, /*apply=*/true);
       transaction.Commit();
     }
-    colmap4_layout_ = HasColmap4Layout(db_, path_);
   } catch (...) {
     sqlite3_close_v2(db_);
     db_ = nullptr;
@@ -702,14 +705,10 @@ std::vector<std::pair<image_t, GeodeticPosition>> Database::ReadColmap4GpsPriors
                       "AND coordinate_system = 0 ORDER BY corr_data_id;");
   std::vector<std::pair<image_t, GeodeticPosition>> priors;
   while (statement.Step()) {
-    double position[3];
-    // Blob before NumBytes, as SQLite asks.
-    const void* blob = statement.Blob(1);
-    if (blob == nullptr || statement.NumBytes(1) != sizeof(position)) continue;
-    std::memcpy(position, blob, sizeof(position));
-    if (!std::isfinite(position[0]) || !std::isfinite(position[1])) continue;
+    const auto position = ReadDoubles<3>(statement, 1, path_, "pose prior position");
+    if (!position || !std::isfinite(position->x()) || !std::isfinite(position->y())) continue;
     priors.emplace_back(static_cast<image_t>(statement.Int64(0)),
-                        GeodeticPosition{position[0], position[1], position[2]});
+                        GeodeticPosition{position->x(), position->y(), position->z()});
   }
   return priors;
 }
