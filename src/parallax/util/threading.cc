@@ -24,14 +24,7 @@ class WorkerPool {
  public:
   // Never destroyed: a thread still in a body when the process exits would otherwise be
   // joined from a static destructor. A forked child starts a new pool (its threads are gone).
-  static WorkerPool& Instance() {
-    static const bool registered = [] {
-      pthread_atfork(nullptr, nullptr, [] { Pointer() = new WorkerPool; });
-      return true;
-    }();
-    (void)registered;
-    return *Pointer();
-  }
+  static WorkerPool& Instance() { return *Pointer(); }
 
   // Runs task() on `count` pool threads and on the calling thread, and returns once all have
   // returned. False, with nothing run, when the pool is in use or the caller is in one of its
@@ -81,7 +74,10 @@ class WorkerPool {
 
   // Made on first use, so that no static initialiser elsewhere can find it unmade.
   static WorkerPool*& Pointer() {
-    static WorkerPool* pool = new WorkerPool;
+    static WorkerPool* pool = [] {
+      pthread_atfork(nullptr, nullptr, [] { Pointer() = new WorkerPool; });
+      return new WorkerPool;
+    }();
     return pool;
   }
   std::mutex caller_mutex_;  // Held by the thread whose loop the pool runs.
