@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "parallax/feature/descriptor_cells.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/feature/sift.h"
 #include "parallax/feature/similarity_kernel.h"
@@ -176,6 +177,52 @@ void BM_ParallaxMatch(benchmark::State& state) {
   SetCounters(state, pair, total_seconds, total_cpu_seconds, num_matches);
 }
 
+// Approximate matching (descriptor_cells.h) on one thread, cross-checked, as the matching
+// stage runs it. Args: pair, cells, assignments. Counters: the share of the exact matcher's
+// matches it returns too, and the share of descriptor pairs it compares.
+void BM_ParallaxMatchInCells(benchmark::State& state) {
+  const DescriptorPair& pair = Pair(static_cast<int>(state.range(0)));
+  DescriptorCellsOptions cells_options;
+  cells_options.num_cells = static_cast<int>(state.range(1));
+  cells_options.num_assignments = static_cast<int>(state.range(2));
+  FeatureDescriptors both(pair.descriptors1.NumRows() + pair.descriptors2.NumRows(), 128);
+  both << pair.descriptors1.bytes, pair.descriptors2.bytes;
+  const DescriptorCells cells = DescriptorCells::Train(both, cells_options);
+  const CellFiledDescriptors filed1 =
+      FileDescriptorsByCell(pair.descriptors1, cells, cells_options.num_assignments);
+  const CellFiledDescriptors filed2 =
+      FileDescriptorsByCell(pair.descriptors2, cells, cells_options.num_assignments);
+  FeatureMatchingOptions options;
+  options.max_ratio = kMaxRatio;
+  options.num_threads = 1;
+  double total_seconds = 0.0, total_cpu_seconds = 0.0;
+  FeatureMatches matches;
+  for (auto _ : state) {
+    Timer timer;
+    const double cpu_start = ProcessCpuSeconds();
+    matches = MatchDescriptorsInCells(filed1, filed2, options);
+    total_cpu_seconds += ProcessCpuSeconds() - cpu_start;
+    total_seconds += timer.ElapsedSeconds();
+    benchmark::DoNotOptimize(matches.data());
+  }
+  SetCounters(state, pair, total_seconds, total_cpu_seconds, matches.size());
+  const FeatureMatches exact = MatchDescriptors(pair.descriptors1, pair.descriptors2, options);
+  size_t same = 0;
+  for (const FeatureMatch& match : matches) {
+    same += std::any_of(exact.begin(), exact.end(), [&match](const FeatureMatch& other) {
+      return other.point2D_idx1 == match.point2D_idx1 && other.point2D_idx2 == match.point2D_idx2;
+    });
+  }
+  double compared = 0;
+  for (size_t c = 0; c < filed1.cells.size(); ++c) {
+    compared += static_cast<double>(filed1.cells[c].query_rows.size()) *
+                static_cast<double>(filed2.cells[c].searched_rows.size());
+  }
+  state.counters["exact_matches_found"] = static_cast<double>(same) / exact.size();
+  state.counters["pairs_compared"] =
+      compared / (static_cast<double>(filed1.num_rows) * filed2.num_rows);
+}
+
 // Args: pair, threads (cv::setNumThreads).
 void BM_OpenCvKnnMatch(benchmark::State& state) {
   const DescriptorPair& pair = Pair(static_cast<int>(state.range(0)));
@@ -200,6 +247,12 @@ void BM_OpenCvKnnMatch(benchmark::State& state) {
 BENCHMARK(BM_ParallaxMatch)
     ->ArgNames({"pair", "threads", "cross_check"})
     ->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ParallaxMatchInCells)
+    ->ArgNames({"pair", "cells", "assignments"})
+    ->ArgsProduct({{0, 1}, {32}, {2, 3, 4}})
+    ->Args({1, 64, 4})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_OpenCvKnnMatch)

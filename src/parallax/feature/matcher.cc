@@ -8,6 +8,7 @@
 #include <immintrin.h>
 #endif
 
+#include "parallax/feature/descriptor_cells.h"
 #include "parallax/feature/similarity_kernel.h"
 #include "parallax/util/check.h"
 #include "parallax/util/threading.h"
@@ -155,6 +156,28 @@ void ScanTile(const float* tile, int num_rows, int num_cols, int stride, int c0,
   }
 }
 
+// The matches of image 1's rows from their top-2 (ratio test, distance bound) and, when
+// best_row_of_col is given, the cross-check: row i's best column must have i as its best.
+// ||a - b||^2 = 2 - 2 a.b; the square roots are taken once per row, at the end. A missing
+// second neighbour (one descriptor in image 2) has similarity -inf, i.e. infinite distance.
+FeatureMatches SelectMatches(const BestTwo& rows, const std::vector<int>* best_row_of_col,
+                             const FeatureMatchingOptions& options) {
+  const float max_ratio = static_cast<float>(options.max_ratio);
+  const float max_distance = static_cast<float>(options.max_distance);
+  FeatureMatches matches;
+  for (size_t i = 0; i < rows.best.size(); ++i) {
+    const int j = rows.best_index[i];
+    if (j < 0) continue;
+    const float distance1 = std::sqrt(std::max(0.0f, 2.0f - 2.0f * rows.best[i]));
+    const float distance2 = std::sqrt(std::max(0.0f, 2.0f - 2.0f * rows.second[i]));
+    if (distance1 > max_distance) continue;
+    if (!(distance1 < max_ratio * distance2)) continue;
+    if (best_row_of_col != nullptr && (*best_row_of_col)[j] != static_cast<int>(i)) continue;
+    matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(j)});
+  }
+  return matches;
+}
+
 }  // namespace
 
 void FeatureMatchingOptions::Check() const {
@@ -268,22 +291,80 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
     }
   }
 
-  // ||a - b||^2 = 2 - 2 a.b; the square roots are taken once per row, at the end. A missing
-  // second neighbour (one descriptor in image 2) has similarity -inf, i.e. infinite distance.
-  const float max_ratio = static_cast<float>(options.max_ratio);
-  const float max_distance = static_cast<float>(options.max_distance);
-  FeatureMatches matches;
-  for (int i = 0; i < num1; ++i) {
-    const int j = rows.best_index[i];
-    if (j < 0) continue;
-    const float distance1 = std::sqrt(std::max(0.0f, 2.0f - 2.0f * rows.best[i]));
-    const float distance2 = std::sqrt(std::max(0.0f, 2.0f - 2.0f * rows.second[i]));
-    if (distance1 > max_distance) continue;
-    if (!(distance1 < max_ratio * distance2)) continue;
-    if (options.cross_check && best_row_of_col[j] != i) continue;
-    matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(j)});
+  return SelectMatches(rows, options.cross_check ? &best_row_of_col : nullptr, options);
+}
+
+FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& descriptors1,
+                                       const CellFiledDescriptors& descriptors2,
+                                       const FeatureMatchingOptions& options) {
+  options.Check();
+  PARALLAX_CHECK_EQ(descriptors1.cells.size(), descriptors2.cells.size());
+  const int num1 = descriptors1.num_rows;
+  const int num2 = descriptors2.num_rows;
+  if (num1 == 0 || num2 == 0) return {};
+  PARALLAX_CHECK_EQ(descriptors1.dim, descriptors2.dim);
+  const int dim = descriptors1.dim;
+
+  BestTwo rows;
+  rows.best.assign(num1, kMinusInfinity);
+  rows.second.assign(num1, kMinusInfinity);
+  rows.best_index.assign(num1, -1);
+  // Best row of image 1 for each row of image 2, over the cells it is filed under.
+  std::vector<float> col_best(num2, kMinusInfinity);
+  std::vector<int> best_row_of_col(num2, -1);
+
+  // Per cell: the running top-2 of its queries over the descriptors filed under it, and the
+  // best query of each of those (positions in the cell's lists until mapped back to rows).
+  BestTwo cell_rows;
+  std::vector<float> cell_col_best, tile;
+  std::vector<int> cell_col_index;
+  for (size_t c = 0; c < descriptors1.cells.size(); ++c) {
+    const CellFiledDescriptors::Cell& query = descriptors1.cells[c];
+    const CellFiledDescriptors::Cell& searched = descriptors2.cells[c];
+    const int num_query = static_cast<int>(query.query_rows.size());
+    const int num_searched = static_cast<int>(searched.searched_rows.size());
+    if (num_query == 0 || num_searched == 0) continue;
+    const int stride = query.query_columns.num_columns;
+    tile.resize(static_cast<size_t>(kColBlock) * stride);
+    cell_rows.best.assign(num_query, kMinusInfinity);
+    cell_rows.second.assign(num_query, kMinusInfinity);
+    cell_rows.best_index.assign(num_query, -1);
+    if (options.cross_check) {
+      cell_col_best.assign(num_searched, kMinusInfinity);
+      cell_col_index.assign(num_searched, -1);
+    }
+    for (int c0 = 0; c0 < num_searched; c0 += kColBlock) {
+      const int num_rows2 = std::min(kColBlock, num_searched - c0);
+      const SimilarityRows rows2{searched.searched_bytes.data() + static_cast<size_t>(c0) * dim,
+                                 searched.searched_scales.data() + c0,
+                                 searched.searched_sums.data() + c0, num_rows2};
+      ComputeSimilarities(query.query_columns, rows2, tile.data());
+      ScanTile(tile.data(), num_rows2, num_query, stride, c0, cell_rows.best.data(),
+               cell_rows.second.data(), cell_rows.best_index.data(),
+               options.cross_check ? cell_col_best.data() + c0 : nullptr,
+               options.cross_check ? cell_col_index.data() + c0 : nullptr, 0);
+    }
+    // Each query is in one cell only, so its top-2 is complete here. The lists ascend, so
+    // ties went to the lower row, as in MatchDescriptors.
+    for (int i = 0; i < num_query; ++i) {
+      const int row1 = query.query_rows[i];
+      rows.best[row1] = cell_rows.best[i];
+      rows.second[row1] = cell_rows.second[i];
+      const int position = cell_rows.best_index[i];
+      rows.best_index[row1] = position >= 0 ? searched.searched_rows[position] : -1;
+    }
+    for (int j = 0; options.cross_check && j < num_searched; ++j) {
+      if (cell_col_index[j] < 0) continue;
+      const int row2 = searched.searched_rows[j];
+      const int row1 = query.query_rows[cell_col_index[j]];
+      if (cell_col_best[j] > col_best[row2] ||
+          (cell_col_best[j] == col_best[row2] && row1 < best_row_of_col[row2])) {
+        col_best[row2] = cell_col_best[j];
+        best_row_of_col[row2] = row1;
+      }
+    }
   }
-  return matches;
+  return SelectMatches(rows, options.cross_check ? &best_row_of_col : nullptr, options);
 }
 
 }  // namespace parallax

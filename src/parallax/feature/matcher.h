@@ -35,4 +35,13 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
                                 const MatchableDescriptors& descriptors2,
                                 const FeatureMatchingOptions& options);
 
+// The same tests with approximate nearest neighbours: each descriptor of image 1 is compared
+// only with the descriptors of image 2 filed under its cell (descriptor_cells.h), about
+// num_assignments / num_cells of them; its best and second best, and the cross-check, are
+// taken among those. On one thread (the matching stage runs pairs in parallel).
+struct CellFiledDescriptors;
+FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& descriptors1,
+                                       const CellFiledDescriptors& descriptors2,
+                                       const FeatureMatchingOptions& options);
+
 }  // namespace parallax
