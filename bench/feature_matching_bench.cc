@@ -200,7 +200,7 @@ void BM_ParallaxMatchInCells(benchmark::State& state) {
   for (auto _ : state) {
     Timer timer;
     const double cpu_start = ProcessCpuSeconds();
-    matches = MatchDescriptorsInCells(filed1, filed2, options);
+    matches = MatchDescriptorsInCells(filed1, filed2, pair.descriptors2, options);
     total_cpu_seconds += ProcessCpuSeconds() - cpu_start;
     total_seconds += timer.ElapsedSeconds();
     benchmark::DoNotOptimize(matches.data());

@@ -164,6 +164,7 @@ class MatchResult:
     num_matched: int
     num_verified: int
     num_preemptive_rejected: int
+    approximate: bool
     seconds: float
     def summary(self) -> dict[str, Any]: ...
 

@@ -173,6 +173,8 @@ void BindResults(py::module_& m) {
       .def_readonly("num_matched", &MatchingStageResult::num_matched)
       .def_readonly("num_verified", &MatchingStageResult::num_verified)
       .def_readonly("num_preemptive_rejected", &MatchingStageResult::num_preemptive_rejected)
+      .def_readonly("approximate", &MatchingStageResult::approximate,
+                    "Whether descriptors were matched approximately, in cells.")
       .def_readonly("seconds", &MatchingStageResult::seconds)
       .def(
           "summary",

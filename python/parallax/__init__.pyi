@@ -142,6 +142,7 @@ class MatchResult:
     num_matched: int
     num_verified: int
     num_preemptive_rejected: int
+    approximate: bool
     seconds: float
     def summary(self) -> dict[str, Any]: ...
 
@@ -236,6 +237,9 @@ def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: 
         preemptive_features: int = ...,
         preemptive_ratio: float = ...,
         preemptive_min_matches: int = ...,
+        approximate_matching: Union[str, os.PathLike] = ...,
+        matching_cells: int = ...,
+        matching_cell_assignments: int = ...,
         ratio: float = ...,
         no_cross_check: bool = ...,
         max_error: float = ...,
@@ -302,6 +306,9 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         preemptive_features: int = ...,
         preemptive_ratio: float = ...,
         preemptive_min_matches: int = ...,
+        approximate_matching: Union[str, os.PathLike] = ...,
+        matching_cells: int = ...,
+        matching_cell_assignments: int = ...,
         ratio: float = ...,
         no_cross_check: bool = ...,
         max_error: float = ...,

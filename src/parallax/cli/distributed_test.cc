@@ -35,6 +35,11 @@ std::string MpiRunPath() {
   return "";
 }
 
+// Every run matches approximately, as large collections are matched: each rank trains the
+// descriptor cells itself, and they must be the same cells for the ranks' matches to be the
+// one-process run's.
+const std::string kApproximateMatching = "--approximate-matching=on";
+
 // mpirun -np 3 parallax reconstruct ... (one thread per rank: three ranks share two cores).
 std::vector<std::string> MpiReconstruct(const fs::path& images, const fs::path& out,
                                         const std::vector<std::string>& extra = {}) {
@@ -42,9 +47,10 @@ std::vector<std::string> MpiReconstruct(const fs::path& images, const fs::path& 
                                    std::to_string(kNumRanks)};
   // CI runs as root, which OpenMPI refuses unless told.
   if (geteuid() == 0) argv.push_back("--allow-run-as-root");
-  for (const std::string& arg : {test::ParallaxBinary(), std::string("reconstruct"),
-                                 std::string("--images"), images.string(), std::string("--output"),
-                                 out.string(), std::string("--threads"), std::string("1")}) {
+  for (const std::string& arg :
+       {test::ParallaxBinary(), std::string("reconstruct"), std::string("--images"),
+        images.string(), std::string("--output"), out.string(), std::string("--threads"),
+        std::string("1"), kApproximateMatching}) {
     argv.push_back(arg);
   }
   argv.insert(argv.end(), extra.begin(), extra.end());
@@ -126,7 +132,7 @@ class DistributedTest : public ::testing::Test {
     // The one-process run every distributed run is compared with.
     const ProcessResult result = test::RunParallax(
         {"reconstruct", "--images", (scene_->path() / "images").string(), "--output",
-         (scene_->path() / "reference").string(), "--threads", "2", "-q"},
+         (scene_->path() / "reference").string(), "--threads", "2", kApproximateMatching, "-q"},
         scene_->path(), 300);
     ASSERT_TRUE(result.ExitedWith(0)) << result.err;
   }

@@ -142,6 +142,24 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
                  "Preemptive test: fewer matches skip the pair")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option_function<std::string>(
+         "--approximate-matching",
+         [options](const std::string& name) {
+           options->approximate.mode = *ApproximateMatchingModeFromName(name);
+         },
+         "Compare each descriptor only with the other image's descriptors in its cells of a "
+         "coarse k-means partition: auto (on where the pairs come from retrieval or GPS), on "
+         "or off (see docs/pair-selection.md)")
+      ->default_str("auto")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
+  app.add_option("--matching-cells", options->approximate.cells.num_cells,
+                 "Approximate matching: cells of the partition")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
+  app.add_option("--matching-cell-assignments", options->approximate.cells.num_assignments,
+                 "Approximate matching: nearest cells each searched descriptor is filed under")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
   app.add_option("--ratio", options->matching.max_ratio, "Lowe's ratio test threshold")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));

@@ -40,8 +40,8 @@ std::vector<int> KMeansPlusPlusSeeds(const MatchableDescriptors& rows, int count
                                      std::mt19937_64* generator) {
   constexpr int kMaxSeedingRows = 20000;
   const int num_rows = std::min(rows.NumRows(), kMaxSeedingRows);
-  std::vector<int> seeds = {static_cast<int>(
-      std::uniform_int_distribution<int>(0, num_rows - 1)(*generator))};
+  std::vector<int> seeds = {
+      static_cast<int>(std::uniform_int_distribution<int>(0, num_rows - 1)(*generator))};
   std::vector<double> distance(num_rows, std::numeric_limits<double>::infinity());
   while (static_cast<int>(seeds.size()) < count) {
     double total = 0;
@@ -93,7 +93,8 @@ DescriptorCells DescriptorCells::Train(const FeatureDescriptors& sample,
   DescriptorCells cells;
   cells.centroids_.resize(num_cells, dim);
   const std::vector<int> seeds = KMeansPlusPlusSeeds(rows, num_cells, &generator);
-  for (int cell = 0; cell < num_cells; ++cell) cells.centroids_.row(cell) = training.row(seeds[cell]);
+  for (int cell = 0; cell < num_cells; ++cell)
+    cells.centroids_.row(cell) = training.row(seeds[cell]);
   std::vector<uint16_t> assignment(num_training, 0), previous;
   for (int iteration = 0; iteration < options.kmeans_iterations; ++iteration) {
     cells.Pack();
@@ -164,14 +165,8 @@ CellFiledDescriptors FileDescriptorsByCell(const MatchableDescriptors& descripto
   for (int row = 0; row < filed.num_rows; ++row) {
     const uint16_t* row_cells = nearest.data() + static_cast<size_t>(row) * num_assignments;
     filed.cells[row_cells[0]].query_rows.push_back(row);
-    for (int k = 0; k < num_assignments; ++k) {
-      CellFiledDescriptors::Cell& cell = filed.cells[row_cells[k]];
-      cell.searched_rows.push_back(row);
-      const uint8_t* bytes = descriptors.bytes.row(row).data();
-      cell.searched_bytes.insert(cell.searched_bytes.end(), bytes, bytes + dim);
-      cell.searched_scales.push_back(descriptors.scales[row]);
-      cell.searched_sums.push_back(descriptors.sums[row]);
-    }
+    for (int k = 0; k < num_assignments; ++k)
+      filed.cells[row_cells[k]].searched_rows.push_back(row);
   }
   const SimilarityKernel kernel = BestSimilarityKernel();
   std::vector<uint8_t> query_bytes;

@@ -51,15 +51,14 @@ class DescriptorCells {
 
 // One image's descriptors filed by cell for MatchDescriptorsInCells. As a query image, each
 // descriptor is in its nearest cell, packed for the similarity kernel; as the searched image,
-// each descriptor is under each of its num_assignments nearest cells. Row lists ascend.
+// each descriptor is listed under each of its num_assignments nearest cells (the rows
+// themselves are gathered from the image's MatchableDescriptors when searched, so that a
+// descriptor is stored once). Row lists ascend.
 struct CellFiledDescriptors {
   struct Cell {
     std::vector<int> query_rows;
     PackedSimilarityColumns query_columns;
     std::vector<int> searched_rows;
-    std::vector<uint8_t> searched_bytes;  // searched_rows' descriptors, in that order.
-    std::vector<float> searched_scales;
-    std::vector<int32_t> searched_sums;
   };
   int num_rows = 0;
   int dim = 0;

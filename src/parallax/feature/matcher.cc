@@ -294,16 +294,18 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
   return SelectMatches(rows, options.cross_check ? &best_row_of_col : nullptr, options);
 }
 
-FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& descriptors1,
-                                       const CellFiledDescriptors& descriptors2,
+FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& filed1,
+                                       const CellFiledDescriptors& filed2,
+                                       const MatchableDescriptors& descriptors2,
                                        const FeatureMatchingOptions& options) {
   options.Check();
-  PARALLAX_CHECK_EQ(descriptors1.cells.size(), descriptors2.cells.size());
-  const int num1 = descriptors1.num_rows;
-  const int num2 = descriptors2.num_rows;
+  PARALLAX_CHECK_EQ(filed1.cells.size(), filed2.cells.size());
+  PARALLAX_CHECK_EQ(filed2.num_rows, descriptors2.NumRows());
+  const int num1 = filed1.num_rows;
+  const int num2 = filed2.num_rows;
   if (num1 == 0 || num2 == 0) return {};
-  PARALLAX_CHECK_EQ(descriptors1.dim, descriptors2.dim);
-  const int dim = descriptors1.dim;
+  PARALLAX_CHECK_EQ(filed1.dim, filed2.dim);
+  const int dim = filed1.dim;
 
   BestTwo rows;
   rows.best.assign(num1, kMinusInfinity);
@@ -318,9 +320,13 @@ FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& descriptors1,
   BestTwo cell_rows;
   std::vector<float> cell_col_best, tile;
   std::vector<int> cell_col_index;
-  for (size_t c = 0; c < descriptors1.cells.size(); ++c) {
-    const CellFiledDescriptors::Cell& query = descriptors1.cells[c];
-    const CellFiledDescriptors::Cell& searched = descriptors2.cells[c];
+  // The searched rows of one cell, gathered into the kernel's row layout.
+  std::vector<uint8_t> searched_bytes;
+  std::vector<float> searched_scales;
+  std::vector<int32_t> searched_sums;
+  for (size_t c = 0; c < filed1.cells.size(); ++c) {
+    const CellFiledDescriptors::Cell& query = filed1.cells[c];
+    const CellFiledDescriptors::Cell& searched = filed2.cells[c];
     const int num_query = static_cast<int>(query.query_rows.size());
     const int num_searched = static_cast<int>(searched.searched_rows.size());
     if (num_query == 0 || num_searched == 0) continue;
@@ -333,11 +339,20 @@ FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& descriptors1,
       cell_col_best.assign(num_searched, kMinusInfinity);
       cell_col_index.assign(num_searched, -1);
     }
+    searched_bytes.resize(static_cast<size_t>(num_searched) * dim);
+    searched_scales.resize(num_searched);
+    searched_sums.resize(num_searched);
+    for (int j = 0; j < num_searched; ++j) {
+      const int row2 = searched.searched_rows[j];
+      std::copy_n(descriptors2.bytes.row(row2).data(), dim,
+                  searched_bytes.data() + static_cast<size_t>(j) * dim);
+      searched_scales[j] = descriptors2.scales[row2];
+      searched_sums[j] = descriptors2.sums[row2];
+    }
     for (int c0 = 0; c0 < num_searched; c0 += kColBlock) {
       const int num_rows2 = std::min(kColBlock, num_searched - c0);
-      const SimilarityRows rows2{searched.searched_bytes.data() + static_cast<size_t>(c0) * dim,
-                                 searched.searched_scales.data() + c0,
-                                 searched.searched_sums.data() + c0, num_rows2};
+      const SimilarityRows rows2{searched_bytes.data() + static_cast<size_t>(c0) * dim,
+                                 searched_scales.data() + c0, searched_sums.data() + c0, num_rows2};
       ComputeSimilarities(query.query_columns, rows2, tile.data());
       ScanTile(tile.data(), num_rows2, num_query, stride, c0, cell_rows.best.data(),
                cell_rows.second.data(), cell_rows.best_index.data(),

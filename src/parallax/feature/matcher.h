@@ -38,10 +38,12 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
 // The same tests with approximate nearest neighbours: each descriptor of image 1 is compared
 // only with the descriptors of image 2 filed under its cell (descriptor_cells.h), about
 // num_assignments / num_cells of them; its best and second best, and the cross-check, are
-// taken among those. On one thread (the matching stage runs pairs in parallel).
+// taken among those. filed2 files the rows of descriptors2. On one thread (the matching
+// stage runs pairs in parallel).
 struct CellFiledDescriptors;
-FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& descriptors1,
-                                       const CellFiledDescriptors& descriptors2,
+FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& filed1,
+                                       const CellFiledDescriptors& filed2,
+                                       const MatchableDescriptors& descriptors2,
                                        const FeatureMatchingOptions& options);
 
 }  // namespace parallax

@@ -1,6 +1,7 @@
 #include "parallax/pipeline/matching_stage.h"
 
 #include <algorithm>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -18,6 +19,7 @@ namespace {
 // What matching and verification need of one image, loaded once per batch that uses it.
 struct ImageFeatures {
   MatchableDescriptors descriptors;
+  CellFiledDescriptors filed;           // Approximate matching's cells of `descriptors`.
   MatchableDescriptors largest;         // The preemptive test's largest-scale features.
   std::vector<Eigen::Vector2d> points;  // Keypoints as stored (pixel centres at +0.5).
 };
@@ -72,7 +74,79 @@ MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
   return PrepareDescriptors(largest);
 }
 
+// Whether approximate matching applies: `auto` turns it on where the pairs come from
+// retrieval or GPS, which is also where every rank of a distributed run can tell without the
+// coordinator's pair selection.
+bool UseApproximateMatching(const MatchingStageOptions& options, size_t num_images) {
+  switch (options.approximate.mode) {
+    case ApproximateMatchingOptions::Mode::kOn:
+      return true;
+    case ApproximateMatchingOptions::Mode::kOff:
+      return false;
+    case ApproximateMatchingOptions::Mode::kAuto:
+      break;
+  }
+  switch (options.pairs.mode) {
+    case PairMode::kRetrieval:
+    case PairMode::kSpatial:
+      return true;
+    case PairMode::kAuto:
+      return num_images > static_cast<size_t>(options.pairs.auto_exhaustive_max_images);
+    case PairMode::kExhaustive:
+    case PairMode::kSequential:
+      return false;
+  }
+  return false;
+}
+
+// The cells, trained on an even share of the rows of up to max_training_images images spread
+// over `image_ids`: the same database gives the same cells on every rank. None without
+// descriptors.
+std::optional<DescriptorCells> TrainDescriptorCells(const ApproximateMatchingOptions& options,
+                                                    const std::vector<image_t>& image_ids,
+                                                    const Database& database) {
+  const size_t num_images =
+      std::min(image_ids.size(), static_cast<size_t>(options.max_training_images));
+  const size_t rows_per_image =
+      std::max<size_t>(1, options.cells.max_training_descriptors / std::max<size_t>(1, num_images));
+  std::vector<FeatureDescriptors> parts;
+  Eigen::Index num_rows = 0;
+  for (size_t k = 0; k < num_images; ++k) {
+    const FeatureDescriptors descriptors =
+        database.ReadDescriptors(image_ids[k * image_ids.size() / num_images]);
+    const size_t stride =
+        std::max<size_t>(1, static_cast<size_t>(descriptors.rows()) / rows_per_image);
+    FeatureDescriptors& part =
+        parts.emplace_back((descriptors.rows() + stride - 1) / stride, descriptors.cols());
+    for (Eigen::Index row = 0; row < part.rows(); ++row) {
+      part.row(row) = descriptors.row(row * static_cast<Eigen::Index>(stride));
+    }
+    num_rows += part.rows();
+  }
+  if (num_rows == 0) return std::nullopt;
+  FeatureDescriptors sample(num_rows, parts.front().cols());
+  Eigen::Index row = 0;
+  for (const FeatureDescriptors& part : parts) {
+    sample.middleRows(row, part.rows()) = part;
+    row += part.rows();
+  }
+  return DescriptorCells::Train(sample, options.cells);
+}
+
 }  // namespace
+
+std::optional<ApproximateMatchingOptions::Mode> ApproximateMatchingModeFromName(
+    const std::string& name) {
+  if (name == "auto") return ApproximateMatchingOptions::Mode::kAuto;
+  if (name == "on") return ApproximateMatchingOptions::Mode::kOn;
+  if (name == "off") return ApproximateMatchingOptions::Mode::kOff;
+  return std::nullopt;
+}
+
+void ApproximateMatchingOptions::Check() const {
+  cells.Check();
+  PARALLAX_CHECK_GT(max_training_images, 0);
+}
 
 void PreemptiveMatchingOptions::Check() const {
   PARALLAX_CHECK_GT(num_features, 0);
@@ -86,6 +160,7 @@ void MatchingStageOptions::Check() const {
   geometry.Check();
   pairs.Check();
   preemptive.Check();
+  approximate.Check();
   PARALLAX_CHECK_GT(batch_size, 0);
 }
 
@@ -143,6 +218,22 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
                        << (stats.preemptive ? ", preemptive test on" : "");
   }
   if (sharing != nullptr) sharing->Share(&pairs);
+
+  // Trained even when every first-round pair is stored (a resumed run), so that the loop
+  // pairs are matched as an uninterrupted run matches them.
+  const Timer cells_timer;
+  std::optional<DescriptorCells> cells;
+  if (UseApproximateMatching(options, image_ids.size())) {
+    cells = TrainDescriptorCells(options.approximate, image_ids, *database);
+  }
+  stats.approximate = cells.has_value();
+  int num_cell_assignments = 0;
+  if (cells) {
+    num_cell_assignments = std::min(options.approximate.cells.num_assignments, cells->NumCells());
+    PARALLAX_LOG(Info) << "Matching: approximate nearest neighbours, in " << cells->NumCells()
+                       << " cells (each descriptor searched under its " << num_cell_assignments
+                       << " nearest; trained in " << cells_timer.ElapsedSeconds() << " s)";
+  }
 
   // Each pair runs on one thread; the parallelism is over pairs.
   FeatureMatchingOptions matching_options = options.matching;
@@ -206,6 +297,10 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
           features.largest =
               LargestFeatures(keypoints[m], features.descriptors, options.preemptive.num_features);
         }
+        if (cells) {
+          features.filed =
+              FileDescriptorsByCell(features.descriptors, *cells, num_cell_assignments);
+        }
       });
       raw_descriptors.clear();
 
@@ -232,8 +327,10 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
           job.preemptive_rejected = job.num_preemptive_matches < options.preemptive.min_matches;
         }
         if (!job.has_matches && !job.preemptive_rejected) {
-          job.matches =
-              MatchDescriptors(features1.descriptors, features2.descriptors, matching_options);
+          job.matches = cells ? MatchDescriptorsInCells(features1.filed, features2.filed,
+                                                        features2.descriptors, matching_options)
+                              : MatchDescriptors(features1.descriptors, features2.descriptors,
+                                                 matching_options);
         }
         job.matching_seconds = pair_timer.ElapsedSeconds();
         pair_timer.Restart();

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "parallax/estimators/two_view_geometry.h"
+#include "parallax/feature/descriptor_cells.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/pipeline/pair_selection.h"
 #include "parallax/scene/database.h"
@@ -29,11 +30,33 @@ struct PreemptiveMatchingOptions {
   void Check() const;
 };
 
+// Approximate nearest neighbours in descriptor matching (feature/descriptor_cells.h): each
+// descriptor is compared only with the other image's descriptors near it, a few cells of a
+// coarse k-means partition, instead of all of them.
+struct ApproximateMatchingOptions {
+  enum class Mode {
+    kAuto,  // On where the pairs come from retrieval or GPS (large collections), else off.
+    kOn,
+    kOff,
+  };
+  Mode mode = Mode::kAuto;
+  DescriptorCellsOptions cells;
+  // The cells are trained on descriptors of up to this many images spread over the
+  // collection (cells.max_training_descriptors of them in all).
+  int max_training_images = 100;
+  void Check() const;
+};
+
+// "auto", "on", "off"; nullopt for anything else.
+std::optional<ApproximateMatchingOptions::Mode> ApproximateMatchingModeFromName(
+    const std::string& name);
+
 struct MatchingStageOptions {
   FeatureMatchingOptions matching;  // Ratio test, distance bound, cross-check.
   TwoViewGeometryOptions geometry;  // Geometric verification (RANSAC threshold, inliers).
   PairSelectionOptions pairs;       // Which pairs (exhaustive, retrieval, GPS, ...).
   PreemptiveMatchingOptions preemptive;
+  ApproximateMatchingOptions approximate;
   int num_threads = -1;  // Pairs processed in parallel; -1: all cores.
   // Pairs written per transaction; a killed run loses at most one batch.
   int batch_size = 500;
@@ -54,6 +77,7 @@ struct PairMatchStats {
 struct MatchingStageResult {
   PairSelection selection;             // How the pairs were chosen (pairs themselves cleared).
   bool preemptive = false;             // Whether the preemptive test ran.
+  bool approximate = false;            // Whether descriptors were matched in cells.
   size_t num_pairs = 0;                // Pairs the mode selects ("considered").
   size_t num_skipped = 0;              // Already verified in the database (resumed run).
   size_t num_matched = 0;              // Matched (or read back) and verified in this run.

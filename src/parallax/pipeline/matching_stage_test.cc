@@ -112,6 +112,7 @@ TEST_F(FeatureMatchingTest, ExhaustiveMatchesAndVerifiesEveryPair) {
   MatchingStageOptions options;
   options.num_threads = 2;
   const MatchingStageResult stats = RunMatchingStage(options, &database);
+  EXPECT_FALSE(stats.approximate);  // auto: exhaustive pairs are matched exactly.
   EXPECT_EQ(stats.num_pairs, 6u);
   EXPECT_EQ(stats.num_matched, 6u);
   EXPECT_EQ(stats.num_skipped, 0u);
@@ -212,12 +213,6 @@ TEST_F(FeatureMatchingTest, PairsWithoutCommonPointsAreDegenerate) {
   EXPECT_TRUE(database.ExistsTwoViewGeometry(1, 2));
 }
 
-}  // namespace
-}  // namespace parallax
-
-namespace parallax {
-namespace {
-
 TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
   Database database(dir_ / "database.db");
   MakeScene(&database, 4, 150, 60);
@@ -257,6 +252,27 @@ TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
   const MatchingStageResult again = RunMatchingStage(options, &database);
   EXPECT_EQ(again.num_skipped, 15u);
   EXPECT_EQ(again.num_matched, 0u);
+}
+
+TEST_F(FeatureMatchingTest, ApproximateMatchingFindsEveryPointInItsCell) {
+  Database database(dir_ / "database.db");
+  MakeScene(&database, 4, 150, 60);
+  MatchingStageOptions options;
+  options.num_threads = 2;
+  options.approximate.mode = ApproximateMatchingOptions::Mode::kOn;
+  options.approximate.cells.num_cells = 8;
+  options.approximate.cells.num_assignments = 2;
+  const MatchingStageResult stats = RunMatchingStage(options, &database);
+  EXPECT_TRUE(stats.approximate);
+  EXPECT_EQ(stats.num_verified, 6u);
+  for (const PairMatchStats& pair : stats.pairs) {
+    // A point's descriptor is the same in every view, so it falls in the same cell: every
+    // point is matched and nothing else, as the exact matcher does.
+    EXPECT_EQ(pair.num_putative, 150);
+    for (const FeatureMatch& match : database.ReadMatches(pair.image_id1, pair.image_id2)) {
+      EXPECT_TRUE(IsCorrect(pair.image_id1, pair.image_id2, match));
+    }
+  }
 }
 
 }  // namespace

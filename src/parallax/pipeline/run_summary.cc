@@ -125,6 +125,7 @@ nlohmann::json MatchingSummary(const MatchingStageResult& stats) {
                             {"pairs_matched", stats.num_matched},
                             {"preemptive", stats.preemptive},
                             {"pairs_stopped_by_preemptive_test", stats.num_preemptive_rejected},
+                            {"approximate_matching", stats.approximate},
                             {"pairs_verified", stats.num_verified},
                             {"pair_selection_seconds", stats.selection.seconds},
                             {"seconds", stats.seconds},
