@@ -48,6 +48,15 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
                  "Image pairs with a smaller share of their matches in points are "
                  "re-triangulated with relaxed thresholds (0: never)")
       ->capture_default_str();
+  app.add_option("--ba-global-images-ratio", mapper.global_ba_images_ratio,
+                 "Global bundle adjustment when the model has grown by this factor in images "
+                 "(COLMAP's Mapper.ba_global_images_ratio)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 100.0));
+  app.add_option("--ba-global-points-ratio", mapper.global_ba_points_ratio,
+                 "... or in points (COLMAP's Mapper.ba_global_points_ratio)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 100.0));
   app.add_flag("!--no-multiple-models", mapper.multiple_models,
                "Stop after the first model instead of starting new ones");
   app.add_flag_function(
