@@ -115,10 +115,9 @@ TEST(MatchDescriptorsInCells, EveryCellSearchedIsTheExactMatcher) {
     matching.num_threads = 1;
     const FeatureMatches exact = MatchDescriptors(descriptors1, descriptors2, matching);
     // Filed under every cell, each descriptor of image 2 meets every query.
-    const FeatureMatches in_cells =
-        MatchDescriptorsInCells(FileDescriptorsByCell(descriptors1, cells, options.num_cells),
-                                FileDescriptorsByCell(descriptors2, cells, options.num_cells),
-                                descriptors2, matching);
+    const FeatureMatches in_cells = MatchDescriptorsInCells(
+        FileDescriptorsByCell(descriptors1, cells, options.num_cells),
+        FileDescriptorsByCell(descriptors2, cells, options.num_cells), descriptors2, matching);
     ASSERT_GT(exact.size(), 100u);
     ASSERT_EQ(in_cells.size(), exact.size()) << "cross-check " << cross_check;
     for (size_t k = 0; k < exact.size(); ++k) {
@@ -183,8 +182,7 @@ TEST(MatchDescriptorsInCells, AnEmptyImageHasNoMatches) {
   const CellFiledDescriptors filed = FileDescriptorsByCell(descriptors, cells, 2);
   const CellFiledDescriptors empty = FileDescriptorsByCell(none, cells, 2);
   EXPECT_TRUE(MatchDescriptorsInCells(filed, empty, none, FeatureMatchingOptions()).empty());
-  EXPECT_TRUE(
-      MatchDescriptorsInCells(empty, filed, descriptors, FeatureMatchingOptions()).empty());
+  EXPECT_TRUE(MatchDescriptorsInCells(empty, filed, descriptors, FeatureMatchingOptions()).empty());
 }
 
 }  // namespace
