@@ -11,7 +11,9 @@
 #      with PARALLAX_COLMAP_NUM_IMAGES retrieved images per image (default 40, the same budget;
 #      COLMAP's own default is 100). PARALLAX_SKIP_COLMAP=1 leaves COLMAP out.
 # Recall is bench/pair_recall.py: the share of gt/overlap_pairs.txt pairs with >= 100 shared
-# scene points that the database verified. Needs PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh.
+# scene points that the database verified, with --explain's account of the pairs missed
+# after an attempt (putative matches, and those that agree with the true cameras).
+# Needs PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh.
 # Results in ${PARALLAX_BENCH_OUT:-/tmp/parallax_pair_selection}/results.jsonl.
 set -euo pipefail
 bench_name=pair_selection
@@ -32,7 +34,7 @@ timed() {
 }
 
 recall() {
-  python3 "$repo/bench/pair_recall.py" --database "$1" --overlap-pairs "$2/gt/overlap_pairs.txt"
+  python3 "$repo/bench/pair_recall.py" --database "$1" --overlap-pairs "$2/gt/overlap_pairs.txt" --explain
 }
 
 for n in "${views[@]}"; do
