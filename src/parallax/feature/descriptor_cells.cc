@@ -169,20 +169,11 @@ CellFiledDescriptors FileDescriptorsByCell(const MatchableDescriptors& descripto
       filed.cells[row_cells[k]].searched_rows.push_back(row);
   }
   const SimilarityKernel kernel = BestSimilarityKernel();
-  std::vector<uint8_t> query_bytes;
-  std::vector<float> query_scales;
+  MatchableDescriptors query;
   for (CellFiledDescriptors::Cell& cell : filed.cells) {
-    const int num_query = static_cast<int>(cell.query_rows.size());
-    if (num_query == 0) continue;
-    query_bytes.resize(static_cast<size_t>(num_query) * dim);
-    query_scales.resize(num_query);
-    for (int i = 0; i < num_query; ++i) {
-      const int row = cell.query_rows[i];
-      std::copy_n(descriptors.bytes.row(row).data(), dim,
-                  query_bytes.data() + static_cast<size_t>(i) * dim);
-      query_scales[i] = descriptors.scales[row];
-    }
-    PackSimilarityColumns(query_bytes.data(), query_scales.data(), num_query, dim, kernel,
+    if (cell.query_rows.empty()) continue;
+    SelectRows(descriptors, cell.query_rows, &query);
+    PackSimilarityColumns(query.bytes.data(), query.scales.data(), query.NumRows(), dim, kernel,
                           &cell.query_columns);
   }
   return filed;

@@ -31,6 +31,12 @@ struct BestTwo {
   std::vector<float> best;
   std::vector<float> second;
   std::vector<int> best_index;
+  // n descriptors with no neighbour yet.
+  void Reset(int n) {
+    best.assign(n, kMinusInfinity);
+    second.assign(n, kMinusInfinity);
+    best_index.assign(n, -1);
+  }
 };
 
 // The maximum of row[0, n) and the first index where it occurs (-1 when n is 0): the maximum
@@ -207,6 +213,19 @@ MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors) {
   return matchable;
 }
 
+void SelectRows(const MatchableDescriptors& descriptors, const std::vector<int>& rows,
+                MatchableDescriptors* selected) {
+  const auto num_rows = static_cast<Eigen::Index>(rows.size());
+  selected->bytes.resize(num_rows, descriptors.bytes.cols());
+  selected->scales.resize(rows.size());
+  selected->sums.resize(rows.size());
+  for (Eigen::Index k = 0; k < num_rows; ++k) {
+    selected->bytes.row(k) = descriptors.bytes.row(rows[k]);
+    selected->scales[k] = descriptors.scales[rows[k]];
+    selected->sums[k] = descriptors.sums[rows[k]];
+  }
+}
+
 UnitDescriptorRows ToUnitRows(const FeatureDescriptors& descriptors) {
   UnitDescriptorRows values = descriptors.cast<float>();
   for (Eigen::Index row = 0; row < values.rows(); ++row) {
@@ -241,9 +260,7 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
   const int num_row_blocks = (num1 + row_block - 1) / row_block;
 
   BestTwo rows;
-  rows.best.assign(num1, kMinusInfinity);
-  rows.second.assign(num1, kMinusInfinity);
-  rows.best_index.assign(num1, -1);
+  rows.Reset(num1);
   // Best row of each column, per row block (merged in block order below).
   std::vector<float> col_best;
   std::vector<int> col_best_index;
@@ -305,12 +322,9 @@ FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& filed1,
   const int num2 = filed2.num_rows;
   if (num1 == 0 || num2 == 0) return {};
   PARALLAX_CHECK_EQ(filed1.dim, filed2.dim);
-  const int dim = filed1.dim;
 
   BestTwo rows;
-  rows.best.assign(num1, kMinusInfinity);
-  rows.second.assign(num1, kMinusInfinity);
-  rows.best_index.assign(num1, -1);
+  rows.Reset(num1);
   // Best row of image 1 for each row of image 2, over the cells it is filed under.
   std::vector<float> col_best(num2, kMinusInfinity);
   std::vector<int> best_row_of_col(num2, -1);
@@ -320,10 +334,7 @@ FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& filed1,
   BestTwo cell_rows;
   std::vector<float> cell_col_best, tile;
   std::vector<int> cell_col_index;
-  // The searched rows of one cell, gathered into the kernel's row layout.
-  std::vector<uint8_t> searched_bytes;
-  std::vector<float> searched_scales;
-  std::vector<int32_t> searched_sums;
+  MatchableDescriptors cell_searched;  // One cell's searched rows, in the kernel's row layout.
   for (size_t c = 0; c < filed1.cells.size(); ++c) {
     const CellFiledDescriptors::Cell& query = filed1.cells[c];
     const CellFiledDescriptors::Cell& searched = filed2.cells[c];
@@ -332,27 +343,17 @@ FeatureMatches MatchDescriptorsInCells(const CellFiledDescriptors& filed1,
     if (num_query == 0 || num_searched == 0) continue;
     const int stride = query.query_columns.num_columns;
     tile.resize(static_cast<size_t>(kColBlock) * stride);
-    cell_rows.best.assign(num_query, kMinusInfinity);
-    cell_rows.second.assign(num_query, kMinusInfinity);
-    cell_rows.best_index.assign(num_query, -1);
+    cell_rows.Reset(num_query);
     if (options.cross_check) {
       cell_col_best.assign(num_searched, kMinusInfinity);
       cell_col_index.assign(num_searched, -1);
     }
-    searched_bytes.resize(static_cast<size_t>(num_searched) * dim);
-    searched_scales.resize(num_searched);
-    searched_sums.resize(num_searched);
-    for (int j = 0; j < num_searched; ++j) {
-      const int row2 = searched.searched_rows[j];
-      std::copy_n(descriptors2.bytes.row(row2).data(), dim,
-                  searched_bytes.data() + static_cast<size_t>(j) * dim);
-      searched_scales[j] = descriptors2.scales[row2];
-      searched_sums[j] = descriptors2.sums[row2];
-    }
+    SelectRows(descriptors2, searched.searched_rows, &cell_searched);
     for (int c0 = 0; c0 < num_searched; c0 += kColBlock) {
       const int num_rows2 = std::min(kColBlock, num_searched - c0);
-      const SimilarityRows rows2{searched_bytes.data() + static_cast<size_t>(c0) * dim,
-                                 searched_scales.data() + c0, searched_sums.data() + c0, num_rows2};
+      const SimilarityRows rows2{cell_searched.bytes.row(c0).data(),
+                                 cell_searched.scales.data() + c0, cell_searched.sums.data() + c0,
+                                 num_rows2};
       ComputeSimilarities(query.query_columns, rows2, tile.data());
       ScanTile(tile.data(), num_rows2, num_query, stride, c0, cell_rows.best.data(),
                cell_rows.second.data(), cell_rows.best_index.data(),

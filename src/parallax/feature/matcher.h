@@ -24,6 +24,11 @@ struct MatchableDescriptors {
 };
 MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors);
 
+// `rows` of `descriptors`, in that order, with their scales and sums (what PrepareDescriptors
+// of those rows gives, without computing it again). `selected`'s storage is reused.
+void SelectRows(const MatchableDescriptors& descriptors, const std::vector<int>& rows,
+                MatchableDescriptors* selected);
+
 // The descriptors as unit-norm float rows (an all-zero row stays zero): what vocabulary trees
 // and other matchers take.
 using UnitDescriptorRows = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;

@@ -67,11 +67,10 @@ MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
     const float scale_a = keypoints[a].ComputeScale(), scale_b = keypoints[b].ComputeScale();
     return scale_a != scale_b ? scale_a > scale_b : a < b;
   });
-  FeatureDescriptors largest(static_cast<Eigen::Index>(keep), descriptors.bytes.cols());
-  for (size_t k = 0; k < keep; ++k) {
-    largest.row(static_cast<Eigen::Index>(k)) = descriptors.bytes.row(order[k]);
-  }
-  return PrepareDescriptors(largest);
+  order.resize(keep);
+  MatchableDescriptors largest;
+  SelectRows(descriptors, order, &largest);
+  return largest;
 }
 
 // Whether approximate matching applies: `auto` turns it on where the pairs come from
