@@ -85,17 +85,8 @@ bool UseApproximateMatching(const MatchingStageOptions& options, size_t num_imag
     case ApproximateMatchingOptions::Mode::kAuto:
       break;
   }
-  switch (options.pairs.mode) {
-    case PairMode::kRetrieval:
-    case PairMode::kSpatial:
-      return true;
-    case PairMode::kAuto:
-      return num_images > static_cast<size_t>(options.pairs.auto_exhaustive_max_images);
-    case PairMode::kExhaustive:
-    case PairMode::kSequential:
-      return false;
-  }
-  return false;
+  const PairMode mode = ResolvedPairMode(options.pairs, num_images);
+  return mode == PairMode::kRetrieval || mode == PairMode::kSpatial;
 }
 
 // The cells, trained on an even share of the rows of up to max_training_images images spread

@@ -320,6 +320,13 @@ std::filesystem::path DefaultVocabTreePath(const std::filesystem::path& database
   return path.replace_extension(".vocab_tree");
 }
 
+PairMode ResolvedPairMode(const PairSelectionOptions& options, size_t num_images) {
+  if (options.mode != PairMode::kAuto) return options.mode;
+  return num_images <= static_cast<size_t>(options.auto_exhaustive_max_images)
+             ? PairMode::kExhaustive
+             : PairMode::kRetrieval;
+}
+
 PairSelection SelectPairs(const PairSelectionOptions& options,
                           const std::vector<image_t>& image_ids, const Database& database) {
   options.Check();
@@ -331,7 +338,7 @@ PairSelection SelectPairs(const PairSelectionOptions& options,
   const size_t n = image_ids.size();
   switch (options.mode) {
     case PairMode::kAuto:
-      if (n <= static_cast<size_t>(options.auto_exhaustive_max_images)) {
+      if (ResolvedPairMode(options, n) == PairMode::kExhaustive) {
         selection.modes = {PairMode::kExhaustive};
         selection.reason = std::to_string(n) + " images, at most " +
                            std::to_string(options.auto_exhaustive_max_images) + ": every pair";

@@ -115,6 +115,11 @@ std::vector<std::pair<image_t, image_t>> OrderPairsForLocality(
 // Where the tree trained for a database is saved: beside it, `<stem>.vocab_tree`.
 std::filesystem::path DefaultVocabTreePath(const std::filesystem::path& database_path);
 
+// The mode that chooses the pairs of `num_images` images: options.mode, with `auto` resolved
+// to exhaustive up to auto_exhaustive_max_images and to retrieval above (to which SelectPairs
+// adds spatial pairs when enough images have GPS).
+PairMode ResolvedPairMode(const PairSelectionOptions& options, size_t num_images);
+
 // Chooses the pairs to match among `image_ids` (sorted by name) of `database`.
 PairSelection SelectPairs(const PairSelectionOptions& options,
                           const std::vector<image_t>& image_ids, const Database& database);
