@@ -102,6 +102,11 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
                  "Retrieval: most similar images matched per image")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--retrieval-neighbors-with-gps", pairs.retrieval.num_neighbors_with_gps,
+                 "Retrieval: most similar images matched per image where GPS neighbours are "
+                 "matched too (auto mode, images with positions)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--retrieval-loop-neighbors", pairs.retrieval.num_loop_neighbors,
                  "Retrieval: after verification, images sharing the most verified neighbours "
                  "matched per image, to close loops retrieval missed (0: none)")

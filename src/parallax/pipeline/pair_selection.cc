@@ -102,7 +102,11 @@ std::vector<ImagePair> SelectRetrievalPairs(const PairSelectionOptions& options,
     index.AddImage(image_id, tree.Quantize(descriptors, options.num_threads));
   }
   index.Finalize();
-  std::vector<ImagePair> pairs = RetrievalPairs(index, image_ids, options.retrieval.num_neighbors);
+  const bool with_gps = std::find(selection->modes.begin(), selection->modes.end(),
+                                  PairMode::kSpatial) != selection->modes.end();
+  std::vector<ImagePair> pairs = RetrievalPairs(
+      index, image_ids,
+      with_gps ? options.retrieval.num_neighbors_with_gps : options.retrieval.num_neighbors);
   PARALLAX_LOG(Info) << "Retrieval: " << image_ids.size() << " images indexed and queried in "
                      << timer.ElapsedSeconds() << " s, " << pairs.size() << " pairs";
   return pairs;
@@ -151,6 +155,7 @@ std::string PairModeName(PairMode mode) {
 
 void RetrievalPairOptions::Check() const {
   PARALLAX_CHECK_GT(num_neighbors, 0);
+  PARALLAX_CHECK_GT(num_neighbors_with_gps, 0);
   PARALLAX_CHECK_GE(num_loop_neighbors, 0);
   PARALLAX_CHECK_GE(num_loop_rounds, 0);
   tree.Check();

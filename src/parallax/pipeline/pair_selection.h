@@ -28,13 +28,17 @@ std::string PairModeName(PairMode mode);
 struct RetrievalPairOptions {
   // Images retrieved per image; a pair found from both sides counts once.
   int num_neighbors = 40;
+  // The same where GPS neighbours are matched too (auto mode with positions): those find the
+  // nearby overlaps at nine in ten verified, retrieval then only has to find the distant
+  // ones, and the loop rounds the rest (docs/pair-selection.md).
+  int num_neighbors_with_gps = 20;
   // After the retrieved pairs are verified, each image is also matched with up to this many
   // images it shares the most verified neighbours with (0: none). Such pairs close the loops
   // of the view graph that retrieval misses: overlapping views that look less alike than
   // repeated roofs and fields elsewhere.
   int num_loop_neighbors = 20;
   // Rounds of that: each starts from the pairs verified so far.
-  int num_loop_rounds = 2;
+  int num_loop_rounds = 3;
   // A saved vocabulary tree to use; empty: reuse the one saved beside the database, or train
   // one on a sample of the collection's descriptors and save it there.
   std::filesystem::path vocab_tree_path;

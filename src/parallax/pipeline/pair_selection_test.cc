@@ -181,6 +181,15 @@ TEST_F(AerialPairSelectionTest, AutoChoosesBySizeAndAddsGpsNeighbours) {
   EXPECT_EQ(large.modes, (std::vector<PairMode>{PairMode::kRetrieval, PairMode::kSpatial}));
   EXPECT_GT(large.num_spatial_pairs, 0u);
   EXPECT_NE(large.reason.find("GPS"), std::string::npos) << large.reason;
+  // Beside GPS neighbours, retrieval takes fewer images per image: the near overlaps are GPS's.
+  options.retrieval.num_neighbors = 6;
+  options.retrieval.num_neighbors_with_gps = 2;
+  const PairSelection with_gps = SelectPairs(options, ImageIds(database), database);
+  EXPECT_GT(with_gps.num_retrieval_pairs, 0u);
+  EXPECT_LE(with_gps.num_retrieval_pairs, 24u * 2u);
+  options.mode = PairMode::kRetrieval;
+  const PairSelection without_gps = SelectPairs(options, ImageIds(database), database);
+  EXPECT_GT(without_gps.num_retrieval_pairs, 24u * 2u);
   // GPS neighbours within 150 m of a survey flown 60 m up overlap nearly always.
   const std::map<ImagePair, int> truth = TruthPairs(database);
   options.mode = PairMode::kSpatial;
