@@ -106,6 +106,12 @@ TEST(ReconstructionPipeline, PhotosAddedLaterAreRegisteredIntoTheEarlierModel) {
   EXPECT_LT(second.evaluation->center_error_ratio.median, 0.002);
   EXPECT_EQ(second.summary["mapper"]["input_model"]["images_kept"], 12);
   EXPECT_EQ(second.summary["mapper"]["input_model"]["images_missing"].size(), 2u);
+  // Where the mapping time went, by phase; the adjustments' share is the solver's time.
+  const nlohmann::json& phases = second.summary["mapper"]["phase_s"];
+  EXPECT_GT(phases["registration"].get<double>(), 0.0);
+  EXPECT_GT(phases["triangulation"].get<double>(), 0.0);
+  EXPECT_NEAR(phases["local_ba"].get<double>() + phases["global_ba"].get<double>(),
+              second.summary["mapper"]["bundle_adjustment_s"].get<double>(), 1e-9);
 
   // --remap: from scratch, the same photos.
   fs::copy_file(dir / "scene" / view(1), dir / "photos" / view(1));

@@ -130,7 +130,11 @@ class IncrementalMapper::ModelBuilder {
     }
     init_image_id1_ = seeded[0];
     init_image_id2_ = seeded[1];
-    const size_t num_observations = CompleteAllTracks(options_.triangulation, &model_);
+    size_t num_observations = 0;
+    {
+      const ScopedTimer timer(&summary_->phase_seconds.completion);
+      num_observations = CompleteAllTracks(options_.triangulation, &model_);
+    }
     PARALLAX_LOG(Info) << "mapper: starting from " << seeded.size() << " posed images, "
                        << num_observations << " observations triangulated";
     // As for registered images: the error before any adjustment that includes the image.
@@ -154,11 +158,16 @@ class IncrementalMapper::ModelBuilder {
       ThrowIfInterrupted("mapping stopped after " + std::to_string(reconstruction_.NumRegImages()) +
                          " registered images; no model was written");
       bool registered_any = false;
-      for (const image_t image_id : RankCandidates(trials)) {
+      std::vector<image_t> candidates;
+      {
+        const ScopedTimer timer(&summary_->phase_seconds.next_view);
+        candidates = RankCandidates(trials);
+      }
+      for (const image_t image_id : candidates) {
         MapperImageReport& report = summary_->images[image_id];
         ++report.num_registration_trials;
         ++trials[image_id];
-        if (RegisterImage(image_id, &report)) {
+        if (TimedRegisterImage(image_id, &report)) {
           registered_any = true;
           AdjustAfterRegistration(image_id);
           break;
@@ -253,7 +262,7 @@ class IncrementalMapper::ModelBuilder {
     reconstruction_.RegisterImage(image_id2);
     init_image_id1_ = image_id1;
     init_image_id2_ = image_id2;
-    TriangulateImage(options_.triangulation, image_id1, &model_);
+    Triangulate(image_id1);
     for (const image_t image_id : {image_id1, image_id2}) {
       summary_->images[image_id].error_before_ba_px =
           reconstruction_.MeanReprojectionErrorOfImage(image_id);
@@ -296,6 +305,21 @@ class IncrementalMapper::ModelBuilder {
     std::vector<image_t> ranked;
     for (const auto& [score, image_id] : scored) ranked.push_back(image_id);
     return ranked;
+  }
+
+  // RegisterImage, its time counted as registration apart from the triangulation it ends with.
+  bool TimedRegisterImage(image_t image_id, MapperImageReport* report) {
+    MapperPhaseSeconds& phases = summary_->phase_seconds;
+    const double triangulation_before = phases.triangulation;
+    const Timer timer;
+    const bool registered = RegisterImage(image_id, report);
+    phases.registration += timer.ElapsedSeconds() - (phases.triangulation - triangulation_before);
+    return registered;
+  }
+
+  void Triangulate(image_t image_id) {
+    const ScopedTimer timer(&summary_->phase_seconds.triangulation);
+    TriangulateImage(options_.triangulation, image_id, &model_);
   }
 
   bool RegisterImage(image_t image_id, MapperImageReport* report) {
@@ -358,7 +382,7 @@ class IncrementalMapper::ModelBuilder {
           "pose rejected: only " + std::to_string(num_added) + " observations fit after refinement";
       return false;
     }
-    TriangulateImage(options_.triangulation, image_id, &model_);
+    Triangulate(image_id);
     progress_->Increment();
     report->reason.clear();
     report->error_before_ba_px = reconstruction_.MeanReprojectionErrorOfImage(image_id);
@@ -463,7 +487,7 @@ class IncrementalMapper::ModelBuilder {
     for (const auto& [camera_id, camera] : reconstruction_.Cameras()) {
       config.constant_cameras.insert(camera_id);
     }
-    RunBundleAdjustment(options_.local_ba, config);
+    RunBundleAdjustment(options_.local_ba, config, &summary_->phase_seconds.local_ba);
     ++summary_->num_local_ba;
     // Points of the adjusted images may have moved: filter them, then let the new image's
     // tracks pick up observations that now fit.
@@ -475,8 +499,12 @@ class IncrementalMapper::ModelBuilder {
     }
     std::sort(affected.begin(), affected.end());
     affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
-    FilterPoints(options_.filter, affected, &reconstruction_);
-    TriangulateImage(options_.triangulation, image_id, &model_);
+    {
+      const ScopedTimer timer(&summary_->phase_seconds.filtering);
+      FilterPoints(options_.filter, affected, &reconstruction_);
+    }
+    Triangulate(image_id);
+    const ScopedTimer timer(&summary_->phase_seconds.completion);
     CompleteAndMergePoints(options_.triangulation, affected, &model_);
   }
 
@@ -488,8 +516,11 @@ class IncrementalMapper::ModelBuilder {
     const std::map<camera_t, std::vector<double>> params_before = CameraParams();
     // Pairs left under-reconstructed get their second chance here, before the adjustment
     // that settles the points they add.
-    const size_t num_retriangulated =
-        RetriangulateUnderReconstructedPairs(options_.triangulation, &model_);
+    size_t num_retriangulated = 0;
+    {
+      const ScopedTimer timer(&summary_->phase_seconds.retriangulation);
+      num_retriangulated = RetriangulateUnderReconstructedPairs(options_.triangulation, &model_);
+    }
     GlobalBundleAdjustRounds(final, refine_principal_point);
     if (refine_principal_point && !IntrinsicsPlausible()) {
       PARALLAX_LOG(Info) << "mapper: refined principal point left the image centre; "
@@ -557,21 +588,30 @@ class IncrementalMapper::ModelBuilder {
       SetCameraConstancy(&config);
       BundleAdjustmentOptions ba_options = final ? options_.final_ba : options_.global_ba;
       ba_options.refine_principal_point |= refine_principal_point;
-      RunBundleAdjustment(ba_options, config);
+      RunBundleAdjustment(ba_options, config, &summary_->phase_seconds.global_ba);
       ++summary_->num_global_ba;
-      const size_t num_filtered = FilterAllPoints(options_.filter, &reconstruction_);
-      const size_t num_completed = CompleteAllTracks(options_.triangulation, &model_) +
-                                   CompleteAndMergeAllPoints(options_.triangulation, &model_);
+      size_t num_filtered = 0, num_completed = 0;
+      {
+        const ScopedTimer timer(&summary_->phase_seconds.filtering);
+        num_filtered = FilterAllPoints(options_.filter, &reconstruction_);
+      }
+      {
+        const ScopedTimer timer(&summary_->phase_seconds.completion);
+        num_completed = CompleteAllTracks(options_.triangulation, &model_) +
+                        CompleteAndMergeAllPoints(options_.triangulation, &model_);
+      }
       const size_t num_observations = std::max<size_t>(1, reconstruction_.NumObservations());
       // Stop refining once the model barely changes.
       if (static_cast<double>(num_filtered + num_completed) / num_observations < 0.001) break;
     }
   }
 
+  // Adds the solver's time to the summary's total and to `phase_seconds` (local or global).
   void RunBundleAdjustment(const BundleAdjustmentOptions& ba_options,
-                           const BundleAdjustmentConfig& config) {
+                           const BundleAdjustmentConfig& config, double* phase_seconds) {
     const BundleAdjustmentSummary ba_summary = BundleAdjust(ba_options, config, &reconstruction_);
     summary_->ba_seconds += ba_summary.seconds;
+    *phase_seconds += ba_summary.seconds;
     const std::string linear_iterations =
         ba_summary.num_linear_iterations > 0
             ? ", " + std::to_string(ba_summary.num_linear_iterations) + " CG iterations"
@@ -675,6 +715,13 @@ std::vector<Reconstruction> IncrementalMapper::Run(const Reconstruction* seed,
                        ") with enough triangulation angle";
   }
   summary->seconds = timer.ElapsedSeconds();
+  const MapperPhaseSeconds& phases = summary->phase_seconds;
+  PARALLAX_LOG(Info) << "mapper: " << summary->seconds << " s: next view " << phases.next_view
+                     << " s, registration " << phases.registration << " s, triangulation "
+                     << phases.triangulation << " s, local BA " << phases.local_ba
+                     << " s, global BA " << phases.global_ba << " s, filtering " << phases.filtering
+                     << " s, completion " << phases.completion << " s, re-triangulation "
+                     << phases.retriangulation << " s";
   return models;
 }
 

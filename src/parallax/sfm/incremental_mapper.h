@@ -93,11 +93,25 @@ struct MapperImageReport {
   double error_after_ba_px = std::numeric_limits<double>::quiet_NaN();
 };
 
+// Wall time of the mapper's phases, each summed over the run. The rest of `seconds` is
+// starting models, bookkeeping and the final reports.
+struct MapperPhaseSeconds {
+  double next_view = 0;        // Ranking the unregistered images by visibility.
+  double registration = 0;     // 2D-3D correspondences, PnP RANSAC and pose refinement.
+  double triangulation = 0;    // New points in each registered image.
+  double local_ba = 0;         // Local bundle adjustments (the solver).
+  double global_ba = 0;        // Global bundle adjustments (the solver).
+  double filtering = 0;        // Observations and points that stopped fitting.
+  double completion = 0;       // Tracks completed and points merged.
+  double retriangulation = 0;  // Under-reconstructed pairs, before each global adjustment.
+};
+
 struct MapperSummary {
   std::map<image_t, MapperImageReport> images;
   size_t num_local_ba = 0;
   size_t num_global_ba = 0;
   double ba_seconds = 0;
+  MapperPhaseSeconds phase_seconds;
   double seconds = 0;
   std::string failure;  // Set when no model could be started.
 };

@@ -57,6 +57,20 @@ TEST(IncrementalMapper, NoisyHemisphereWithDistortion) {
   EXPECT_LT(copy.UpdatePointErrors(), 0.8);
   const PoseErrors errors = CompareToTruth(models[0], truth);
   EXPECT_LT(errors.max_rotation_deg, 0.1);
+
+  // Every phase ran, the solver's time is split between local and global adjustments, and
+  // the phases fit in the run.
+  const MapperPhaseSeconds& phases = summary.phase_seconds;
+  EXPECT_GT(summary.num_local_ba, 0u);
+  for (const double seconds :
+       {phases.next_view, phases.registration, phases.triangulation, phases.local_ba,
+        phases.global_ba, phases.filtering, phases.completion, phases.retriangulation}) {
+    EXPECT_GT(seconds, 0.0);
+  }
+  EXPECT_NEAR(phases.local_ba + phases.global_ba, summary.ba_seconds, 1e-9);
+  EXPECT_LE(phases.next_view + phases.registration + phases.triangulation + phases.local_ba +
+                phases.global_ba + phases.filtering + phases.completion + phases.retriangulation,
+            summary.seconds);
 }
 
 // The first `num_seed_images` images of `truth` with their true poses in a frame of their

@@ -19,4 +19,18 @@ class Timer {
   Clock::time_point start_;
 };
 
+// Adds the wall time until it goes out of scope to `*total`: one phase's time summed over
+// the many calls of a run.
+class ScopedTimer {
+ public:
+  explicit ScopedTimer(double* total) : total_(total) {}
+  ~ScopedTimer() { *total_ += timer_.ElapsedSeconds(); }
+  ScopedTimer(const ScopedTimer&) = delete;
+  ScopedTimer& operator=(const ScopedTimer&) = delete;
+
+ private:
+  double* total_;
+  Timer timer_;
+};
+
 }  // namespace parallax
