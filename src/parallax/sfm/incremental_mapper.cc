@@ -285,13 +285,22 @@ class IncrementalMapper::ModelBuilder {
 
   // Unregistered images connected to the model, best first.
   std::vector<image_t> RankCandidates(const std::map<image_t, int>& trials) const {
-    std::set<image_t> connected;
+    // Marked by id, then read in id order as a std::set would give them: each registered
+    // image's neighbours are walked before every registration, and a tree insert per
+    // neighbour cost more than the walk.
+    const std::map<image_t, Image>& images = reconstruction_.Images();
+    std::vector<char> is_connected(images.empty() ? 0 : images.rbegin()->first + 1, 0);
     for (const image_t image_id : reconstruction_.RegImageIds()) {
       for (const auto& [neighbor, count] : input_.correspondence_graph.NeighborsOf(image_id)) {
-        if (!reconstruction_.IsImageRegistered(neighbor) && Available(neighbor)) {
-          connected.insert(neighbor);
+        if (neighbor < is_connected.size() && !is_connected[neighbor] &&
+            !reconstruction_.IsImageRegistered(neighbor) && Available(neighbor)) {
+          is_connected[neighbor] = 1;
         }
       }
+    }
+    std::vector<image_t> connected;
+    for (image_t image_id = 0; image_id < is_connected.size(); ++image_id) {
+      if (is_connected[image_id]) connected.push_back(image_id);
     }
     std::vector<std::pair<double, image_t>> scored;
     for (const image_t image_id : connected) {

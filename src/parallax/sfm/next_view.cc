@@ -1,7 +1,7 @@
 #include "parallax/sfm/next_view.h"
 
 #include <algorithm>
-#include <vector>
+#include <array>
 
 namespace parallax {
 
@@ -12,11 +12,10 @@ double VisibilityScore(image_t image_id, const TrackedReconstruction& model) {
   const Camera& camera = reconstruction.GetCamera(image.camera_id);
   const double width = std::max<double>(1.0, camera.width);
   const double height = std::max<double>(1.0, camera.height);
-  std::vector<std::vector<char>> occupied(kNumLevels);
-  for (int level = 0; level < kNumLevels; ++level) {
-    const int cells = 2 << level;
-    occupied[level].assign(cells * cells, 0);
-  }
+  // Cells of the 2x2, 4x4 and 8x8 grids, one after the other: no allocation per call (the
+  // mapper scores every connected image before each registration).
+  std::array<char, 4 + 16 + 64> occupied{};
+  constexpr int kLevelOffset[kNumLevels] = {0, 4, 20};
   size_t num_visible = 0;
   double score = 0;
   const track_t* tracks = model.Graph().TracksOfImage(image_id);
@@ -29,7 +28,7 @@ double VisibilityScore(image_t image_id, const TrackedReconstruction& model) {
       const int cells = 2 << level;
       const int cx = std::clamp(static_cast<int>(xy.x() / width * cells), 0, cells - 1);
       const int cy = std::clamp(static_cast<int>(xy.y() / height * cells), 0, cells - 1);
-      char& cell = occupied[level][cy * cells + cx];
+      char& cell = occupied[kLevelOffset[level] + cy * cells + cx];
       if (!cell) {
         cell = 1;
         score += cells;  // A new cell at a finer level is worth more.
