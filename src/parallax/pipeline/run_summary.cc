@@ -45,19 +45,14 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   }
   stage_times["total"] = total;
   summary["timings_s"] = stage_times;
-  const MapperPhaseSeconds& phases = result.summary.phase_seconds;
+  nlohmann::json phase_times = nlohmann::json::object();
+  for (const auto& [name, seconds] : result.summary.phase_seconds.Named()) {
+    phase_times[name] = seconds;
+  }
   summary["mapper"] = {{"local_bundle_adjustments", result.summary.num_local_ba},
                        {"global_bundle_adjustments", result.summary.num_global_ba},
-                       {"bundle_adjustment_s", result.summary.ba_seconds},
-                       {"phase_s",
-                        {{"next_view", phases.next_view},
-                         {"registration", phases.registration},
-                         {"triangulation", phases.triangulation},
-                         {"local_ba", phases.local_ba},
-                         {"global_ba", phases.global_ba},
-                         {"filtering", phases.filtering},
-                         {"completion", phases.completion},
-                         {"retriangulation", phases.retriangulation}}}};
+                       {"bundle_adjustment_s", result.summary.BaSeconds()},
+                       {"phase_s", phase_times}};
   if (result.num_input_model_images > 0 || !result.input_model_images_missing.empty()) {
     // An extended model: the images that kept their poses, and those that are gone.
     summary["mapper"]["input_model"] = {{"images_kept", result.num_input_model_images},

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include "parallax/geometry/essential_matrix.h"
 #include "parallax/geometry/triangulation.h"
@@ -615,11 +616,10 @@ class IncrementalMapper::ModelBuilder {
     }
   }
 
-  // Adds the solver's time to the summary's total and to `phase_seconds` (local or global).
+  // Adds the solver's time to `phase_seconds` (local or global BA).
   void RunBundleAdjustment(const BundleAdjustmentOptions& ba_options,
                            const BundleAdjustmentConfig& config, double* phase_seconds) {
     const BundleAdjustmentSummary ba_summary = BundleAdjust(ba_options, config, &reconstruction_);
-    summary_->ba_seconds += ba_summary.seconds;
     *phase_seconds += ba_summary.seconds;
     const std::string linear_iterations =
         ba_summary.num_linear_iterations > 0
@@ -646,6 +646,19 @@ class IncrementalMapper::ModelBuilder {
   size_t points_at_last_global_ba_ = 0;
   size_t num_seed_images_ = 0;  // Registered from an input model (Extend).
 };
+
+std::vector<std::pair<const char*, double>> MapperPhaseSeconds::Named() const {
+  return {{"next_view", next_view},         {"registration", registration},
+          {"triangulation", triangulation}, {"local_ba", local_ba},
+          {"global_ba", global_ba},         {"filtering", filtering},
+          {"completion", completion},       {"retriangulation", retriangulation}};
+}
+
+double MapperPhaseSeconds::Total() const {
+  double total = 0;
+  for (const auto& [name, seconds] : Named()) total += seconds;
+  return total;
+}
 
 IncrementalMapper::IncrementalMapper(const IncrementalMapperOptions& options,
                                      const MapperInput& input)
@@ -724,13 +737,11 @@ std::vector<Reconstruction> IncrementalMapper::Run(const Reconstruction* seed,
                        ") with enough triangulation angle";
   }
   summary->seconds = timer.ElapsedSeconds();
-  const MapperPhaseSeconds& phases = summary->phase_seconds;
-  PARALLAX_LOG(Info) << "mapper: " << summary->seconds << " s: next view " << phases.next_view
-                     << " s, registration " << phases.registration << " s, triangulation "
-                     << phases.triangulation << " s, local BA " << phases.local_ba
-                     << " s, global BA " << phases.global_ba << " s, filtering " << phases.filtering
-                     << " s, completion " << phases.completion << " s, re-triangulation "
-                     << phases.retriangulation << " s";
+  std::ostringstream phases;
+  for (const auto& [name, seconds] : summary->phase_seconds.Named()) {
+    phases << ", " << name << " " << seconds << " s";
+  }
+  PARALLAX_LOG(Info) << "mapper: " << summary->seconds << " s" << phases.str();
   return models;
 }
 

@@ -4,6 +4,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "parallax/estimators/absolute_pose.h"
@@ -104,14 +105,19 @@ struct MapperPhaseSeconds {
   double filtering = 0;        // Observations and points that stopped fitting.
   double completion = 0;       // Tracks completed and points merged.
   double retriangulation = 0;  // Under-reconstructed pairs, before each global adjustment.
+
+  // Each phase with its name (summary.json's key, and the log's), in the order above.
+  std::vector<std::pair<const char*, double>> Named() const;
+  double Total() const;
 };
 
 struct MapperSummary {
   std::map<image_t, MapperImageReport> images;
   size_t num_local_ba = 0;
   size_t num_global_ba = 0;
-  double ba_seconds = 0;
   MapperPhaseSeconds phase_seconds;
+  // The bundle-adjustment solver's time, local and global.
+  double BaSeconds() const { return phase_seconds.local_ba + phase_seconds.global_ba; }
   double seconds = 0;
   std::string failure;  // Set when no model could be started.
 };
