@@ -165,6 +165,9 @@ void Reconstruction::DeleteObservation(image_t image_id, point2D_t point2D_idx) 
   point.track.DeleteElement(image_id, point2D_idx);
   point2D.point3D_id = kInvalidPoint3DId;
   --image.num_points3D;
+  if (keep_removed_observations_) {
+    removed_observations_.push_back({{image_id, point2D_idx}, point3D_id});
+  }
 }
 
 void Reconstruction::DeletePoint3D(point3D_t point3D_id) {
@@ -174,6 +177,7 @@ void Reconstruction::DeletePoint3D(point3D_t point3D_id) {
     Image& image = GetImage(element.image_id);
     image.points2D[element.point2D_idx].point3D_id = kInvalidPoint3DId;
     --image.num_points3D;
+    if (keep_removed_observations_) removed_observations_.push_back({element, point3D_id});
   }
   if (point3D_id < point_index_.size()) point_index_[point3D_id] = nullptr;
   points3D_.erase(it);
@@ -194,6 +198,12 @@ point3D_t Reconstruction::MergePoints3D(point3D_t point3D_id1, point3D_t point3D
   DeletePoint3D(point3D_id1);
   DeletePoint3D(point3D_id2);
   return AddPoint3D(xyz, std::move(track), color.array().round().cast<uint8_t>());
+}
+
+std::vector<Reconstruction::RemovedObservation> Reconstruction::TakeRemovedObservations() {
+  std::vector<RemovedObservation> removed;
+  removed.swap(removed_observations_);
+  return removed;
 }
 
 void Reconstruction::RegisterImage(image_t image_id) { GetImage(image_id).registered = true; }

@@ -57,6 +57,18 @@ class Reconstruction {
   // Merges two points into one at the track-weighted mean position; returns the merged id.
   point3D_t MergePoints3D(point3D_t point3D_id1, point3D_t point3D_id2);
 
+  // An observation that left its point: filtered out, its image deregistered, or its point
+  // deleted or merged away (the point may still exist).
+  struct RemovedObservation {
+    TrackElement element;
+    point3D_t point3D_id = kInvalidPoint3DId;
+  };
+  // From now on, every removed observation is kept until taken: for state held beside the
+  // model that must follow its points (the mapper's next-view scores). Copies do not keep.
+  void KeepRemovedObservations() { keep_removed_observations_ = true; }
+  // The observations removed since the last call, oldest first.
+  std::vector<RemovedObservation> TakeRemovedObservations();
+
   void RegisterImage(image_t image_id);
   // Unregisters and removes every observation the image has.
   void DeRegisterImage(image_t image_id);
@@ -104,6 +116,8 @@ class Reconstruction {
   // pointers stay valid until their point is erased; copies rebuild them.
   std::vector<Point3D*> point_index_;
   point3D_t next_point3D_id_ = 1;
+  bool keep_removed_observations_ = false;
+  std::vector<RemovedObservation> removed_observations_;
 };
 
 }  // namespace parallax

@@ -63,6 +63,18 @@ Reconstruction ExtractRegisteredModel(const Reconstruction& reconstruction) {
   return model;
 }
 
+namespace {
+
+// The input's cameras and images, none registered yet.
+Reconstruction Unregistered(const MapperInput& input) {
+  Reconstruction reconstruction;
+  for (const auto& [camera_id, camera] : input.cameras) reconstruction.AddCamera(camera);
+  for (const auto& [image_id, image] : input.images) reconstruction.AddImage(image);
+  return reconstruction;
+}
+
+}  // namespace
+
 // Builds one model from the images not used by earlier models.
 class IncrementalMapper::ModelBuilder {
  public:
@@ -74,10 +86,9 @@ class IncrementalMapper::ModelBuilder {
         used_images_(used_images),
         summary_(summary),
         progress_(progress),
-        model_(input.correspondence_graph, &reconstruction_) {
-    for (const auto& [camera_id, camera] : input.cameras) reconstruction_.AddCamera(camera);
-    for (const auto& [image_id, image] : input.images) reconstruction_.AddImage(image);
-  }
+        reconstruction_(Unregistered(input)),
+        model_(input.correspondence_graph, &reconstruction_),
+        visibility_(&model_) {}
 
   Reconstruction& Model() { return reconstruction_; }
 
@@ -285,7 +296,7 @@ class IncrementalMapper::ModelBuilder {
   }
 
   // Unregistered images connected to the model, best first.
-  std::vector<image_t> RankCandidates(const std::map<image_t, int>& trials) const {
+  std::vector<image_t> RankCandidates(const std::map<image_t, int>& trials) {
     // Marked by id, then read in id order as a std::set would give them: each registered
     // image's neighbours are walked before every registration, and a tree insert per
     // neighbour cost more than the walk.
@@ -303,11 +314,12 @@ class IncrementalMapper::ModelBuilder {
     for (image_t image_id = 0; image_id < is_connected.size(); ++image_id) {
       if (is_connected[image_id]) connected.push_back(image_id);
     }
+    visibility_.Update();
     std::vector<std::pair<double, image_t>> scored;
     for (const image_t image_id : connected) {
       const auto it = trials.find(image_id);
       if (it != trials.end() && it->second >= options_.max_registration_trials) continue;
-      const double score = VisibilityScore(image_id, model_);
+      const double score = visibility_.Score(image_id);
       if (score > 0) scored.emplace_back(score, image_id);
     }
     std::stable_sort(scored.begin(), scored.end(),
@@ -640,6 +652,7 @@ class IncrementalMapper::ModelBuilder {
   ProgressReporter* progress_;
   Reconstruction reconstruction_;
   TrackedReconstruction model_;
+  VisibilityScores visibility_;  // Of the unregistered images, for ranking the next view.
   image_t init_image_id1_ = kInvalidImageId;
   image_t init_image_id2_ = kInvalidImageId;
   size_t images_at_last_global_ba_ = 0;

@@ -2,6 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <iterator>
+#include <random>
+
+#include "parallax/sfm/testing/synthetic_mapper_input.h"
+#include "parallax/sfm/track_triangulation.h"
+
 namespace parallax {
 namespace {
 
@@ -59,6 +65,82 @@ TEST(VisibilityScore, NoTriangulatedPointsScoreZeroAndMoreOfTheSameCountAsATie) 
   std::vector<Eigen::Vector2d> doubled = corners;
   doubled.emplace_back(6, 6);
   EXPECT_NEAR(Score(doubled, 5) - Score(corners, 4), 1e-3, 1e-12);
+}
+
+// The cached scores equal the scores computed afresh through every kind of edit the mapper
+// makes: images registered and triangulated, observations filtered, points deleted and
+// merged, images deregistered, and tracks left by a point that lives on.
+TEST(VisibilityScores, FollowEveryEditOfTheModel) {
+  PosedSyntheticScene scene(/*num_images=*/10, /*num_points3D=*/400);
+  TrackedReconstruction tracked(scene.input.correspondence_graph, &scene.model);
+  VisibilityScores scores(&tracked);
+  const TrackTriangulationOptions triangulation;
+  const auto expect_fresh_scores = [&](const std::string& step) {
+    scores.Update();
+    for (const auto& [image_id, image] : scene.model.Images()) {
+      ASSERT_EQ(scores.Score(image_id), VisibilityScore(image_id, tracked))
+          << "image " << image_id << " after " << step;
+    }
+  };
+  const auto register_image = [&](image_t image_id) {
+    scene.model.RegisterImage(image_id);
+    TriangulateImage(triangulation, image_id, &tracked);
+  };
+  for (image_t image_id = 1; image_id <= 4; ++image_id) register_image(image_id);
+  expect_fresh_scores("registering four images");
+  EXPECT_GT(scores.Score(5), 0.0);
+
+  std::mt19937 random(7);
+  const auto random_point = [&]() {
+    auto it = scene.model.Points3D().begin();
+    std::advance(it, random() % scene.model.NumPoints3D());
+    return it->first;
+  };
+  image_t next_image = 5;
+  for (int step = 0; step < 1000 && scene.model.NumPoints3D() > 2; ++step) {
+    switch (random() % 6) {
+      case 0:  // A new image, or new points in a registered one for what was deleted.
+        if (next_image <= 10) {
+          register_image(next_image++);
+        } else {
+          const std::vector<image_t> registered = scene.model.RegImageIds();
+          TriangulateImage(triangulation, registered[random() % registered.size()], &tracked);
+        }
+        break;
+      case 1: {
+        const Point3D& point = scene.model.GetPoint3D(random_point());
+        const TrackElement element = point.track.elements[random() % point.track.Length()];
+        scene.model.DeleteObservation(element.image_id, element.point2D_idx);
+        break;
+      }
+      case 2:
+        scene.model.DeletePoint3D(random_point());
+        break;
+      case 3: {
+        const point3D_t point3D_id1 = random_point();
+        const point3D_t point3D_id2 = random_point();
+        if (point3D_id1 != point3D_id2) tracked.MergePoints3D(point3D_id1, point3D_id2);
+        break;
+      }
+      case 4: {  // Every element of one track leaves a (merged) point that lives on.
+        const Point3D& point = scene.model.GetPoint3D(random_point());
+        const CorrespondenceGraph& graph = scene.input.correspondence_graph;
+        const TrackElement first = point.track.elements.front();
+        const track_t track_id = graph.TrackOf(first.image_id, first.point2D_idx);
+        for (const TrackElement& element : std::vector<TrackElement>(point.track.elements)) {
+          if (graph.TrackOf(element.image_id, element.point2D_idx) == track_id) {
+            scene.model.DeleteObservation(element.image_id, element.point2D_idx);
+          }
+        }
+        break;
+      }
+      default: {
+        const std::vector<image_t> registered = scene.model.RegImageIds();
+        if (registered.size() > 3) scene.model.DeRegisterImage(registered[random() % 4]);
+      }
+    }
+    expect_fresh_scores("step " + std::to_string(step));
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "parallax/sfm/tracked_reconstruction.h"
 
 #include <algorithm>
+#include <numeric>
 
 namespace parallax {
 
@@ -88,7 +89,56 @@ point3D_t TrackedReconstruction::MergePoints3D(point3D_t point3D_id1, point3D_t 
 
 void TrackedReconstruction::NotePoint(const TrackElement& element, point3D_t point3D_id) {
   const track_t track_id = graph_.TrackOf(element.image_id, element.point2D_idx);
-  if (track_id != kInvalidTrackId) track_point3D_[track_id] = point3D_id;
+  if (track_id == kInvalidTrackId) return;
+  track_point3D_[track_id] = point3D_id;
+  if (noting_changes_) changed_tracks_.push_back(track_id);
+}
+
+std::vector<track_t> TrackedReconstruction::TakeChangedTracks() {
+  if (!noting_changes_) {
+    noting_changes_ = true;
+    reconstruction_->KeepRemovedObservations();
+    std::vector<track_t> all(graph_.NumTracks());
+    std::iota(all.begin(), all.end(), track_t{0});
+    // Tracks whose point lost their elements before noting began must be filed as well.
+    for (const track_t track_id : all) {
+      const point3D_t point3D_id = PointOfTrack(track_id);
+      if (point3D_id == kInvalidPoint3DId) continue;
+      const std::vector<TrackElement>& elements =
+          reconstruction_->GetPoint3D(point3D_id).track.elements;
+      if (std::none_of(elements.begin(), elements.end(), [&](const TrackElement& element) {
+            return graph_.TrackOf(element.image_id, element.point2D_idx) == track_id;
+          })) {
+        tracks_left_by_point_[point3D_id].push_back(track_id);
+      }
+    }
+    return all;
+  }
+  std::vector<track_t> changed;
+  changed.swap(changed_tracks_);
+  NoteRemovedObservations(&changed);
+  return changed;
+}
+
+void TrackedReconstruction::NoteRemovedObservations(std::vector<track_t>* changed) {
+  // A track's point changes only when the track is noted with another point (NotePoint) or
+  // its point is deleted. The deleted point's remaining elements lead to most such tracks;
+  // the rest lost the element that linked them earlier, and were filed here then.
+  for (const Reconstruction::RemovedObservation& removed :
+       reconstruction_->TakeRemovedObservations()) {
+    const track_t track_id = graph_.TrackOf(removed.element.image_id, removed.element.point2D_idx);
+    if (track_id != kInvalidTrackId) changed->push_back(track_id);
+    if (reconstruction_->ExistsPoint3D(removed.point3D_id)) {
+      if (track_id != kInvalidTrackId && track_point3D_[track_id] == removed.point3D_id) {
+        tracks_left_by_point_[removed.point3D_id].push_back(track_id);
+      }
+      continue;
+    }
+    const auto left = tracks_left_by_point_.find(removed.point3D_id);
+    if (left == tracks_left_by_point_.end()) continue;
+    changed->insert(changed->end(), left->second.begin(), left->second.end());
+    tracks_left_by_point_.erase(left);
+  }
 }
 
 }  // namespace parallax

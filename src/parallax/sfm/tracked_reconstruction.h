@@ -1,6 +1,7 @@
 #pragma once
 
 #include <set>
+#include <unordered_map>
 #include <vector>
 
 #include "parallax/scene/correspondence_graph.h"
@@ -25,6 +26,10 @@ class TrackedReconstruction {
   // deleted by filtering or merged away read as none until another takes one). For ranking
   // candidate images, where a walk over every track would cost too much.
   point3D_t PointOfTrack(track_t track_id) const;
+  // Tracks whose PointOfTrack may have changed since the last call, some more than once or
+  // unchanged: for state that follows the points of tracks (the next-view scores). The first
+  // call returns every track and starts noting changes.
+  std::vector<track_t> TakeChangedTracks();
   // Every live point holding one of the track's elements (a walk over its elements).
   std::vector<point3D_t> PointsOfTrack(track_t track_id) const;
   // Live points holding a keypoint matched with this one.
@@ -48,10 +53,17 @@ class TrackedReconstruction {
   // Appends the point of a keypoint in a registered image, if it has one and is not listed.
   void AddPointOf(const TrackElement& element, std::vector<point3D_t>* point3D_ids) const;
   void NotePoint(const TrackElement& element, point3D_t point3D_id);
+  // Files the model's removed observations under the tracks they change.
+  void NoteRemovedObservations(std::vector<track_t>* changed);
 
   const CorrespondenceGraph& graph_;
   Reconstruction* reconstruction_;
   std::vector<point3D_t> track_point3D_;
+  bool noting_changes_ = false;
+  std::vector<track_t> changed_tracks_;  // Since TakeChangedTracks last ran.
+  // Tracks whose element left their (live) point: the point is still theirs, and they change
+  // when it goes, though its track no longer leads to them.
+  std::unordered_map<point3D_t, std::vector<track_t>> tracks_left_by_point_;
   std::set<image_pair_t> retriangulated_pairs_;
   mutable std::vector<const Image*> image_cache_;  // By image id; nullptr: not looked up yet.
 };
