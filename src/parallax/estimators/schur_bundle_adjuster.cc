@@ -312,15 +312,20 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
         project_[c](params, point_in_cam, &img, &d_img_d_cam,
                     camera_offset >= 0 ? d_img_d_params : nullptr);
         jacobian.residual = img - observation.xy;
-        // d(R X)/d(rotation vector) for R <- exp([w]x) R is -[R X]x.
-        Eigen::Matrix3d minus_skew;
-        minus_skew << 0, rotated.z(), -rotated.y(), -rotated.z(), 0, rotated.x(), rotated.y(),
-            -rotated.x(), 0;
-        jacobian.pose.leftCols<3>() = d_img_d_cam * minus_skew;
-        jacobian.pose.rightCols<3>() = d_img_d_cam;
-        const auto& pose = problem_.poses[p];
-        for (int axis = 0; axis < 3; ++axis) {
-          if (pose.constant_translation[axis]) jacobian.pose.col(3 + axis).setZero();
+        // Only variable poses need theirs (and are the only ones read): in a local adjustment
+        // most observations are in the constant images around it.
+        const int pose_offset = pose_offset_[p];
+        if (pose_offset >= 0) {
+          // d(R X)/d(rotation vector) for R <- exp([w]x) R is -[R X]x.
+          Eigen::Matrix3d minus_skew;
+          minus_skew << 0, rotated.z(), -rotated.y(), -rotated.z(), 0, rotated.x(), rotated.y(),
+              -rotated.x(), 0;
+          jacobian.pose.leftCols<3>() = d_img_d_cam * minus_skew;
+          jacobian.pose.rightCols<3>() = d_img_d_cam;
+          const auto& pose = problem_.poses[p];
+          for (int axis = 0; axis < 3; ++axis) {
+            if (pose.constant_translation[axis]) jacobian.pose.col(3 + axis).setZero();
+          }
         }
         jacobian.point = d_img_d_cam * rotations[p];
         const int dim = camera_dim_[c];
@@ -336,11 +341,10 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
         cost += HalfRobustCost(loss_, jacobian.residual.squaredNorm(), &scale);
         if (loss_ != nullptr) {
           jacobian.residual *= scale;
-          jacobian.pose *= scale;
+          if (pose_offset >= 0) jacobian.pose *= scale;
           jacobian.point *= scale;
           if (camera_offset >= 0) CameraJacobian(k, dim) *= scale;
         }
-        const int pose_offset = pose_offset_[p];
         if (pose_offset >= 0) {
           u->template Block<6, 6>(pose_offset, pose_offset).noalias() +=
               jacobian.pose.transpose() * jacobian.pose;
