@@ -320,6 +320,60 @@ TEST_P(BundleAdjustmentSolvers, ImagesOutsideConfigStayConstant) {
   EXPECT_LT(errors.max_point, 1e-6);
 }
 
+// The same scene with every image id multiplied by `factor` (points keep their ids).
+Reconstruction WithImageIdsTimes(const Reconstruction& scene, image_t factor) {
+  Reconstruction renumbered;
+  for (const auto& [camera_id, camera] : scene.Cameras()) renumbered.AddCamera(camera);
+  for (const auto& [image_id, image] : scene.Images()) {
+    Image copy = image;
+    copy.image_id = image_id * factor;
+    copy.registered = false;
+    copy.num_points3D = 0;
+    for (Point2D& point2D : copy.points2D) point2D.point3D_id = kInvalidPoint3DId;
+    renumbered.AddImage(copy);
+    if (image.registered) renumbered.RegisterImage(copy.image_id);
+  }
+  for (const auto& [point3D_id, point] : scene.Points3D()) {
+    Point3D copy = point;
+    for (TrackElement& element : copy.track.elements) element.image_id *= factor;
+    renumbered.AddPoint3DWithId(point3D_id, copy);
+  }
+  return renumbered;
+}
+
+// Ids far apart (as a COLMAP database may hold) take the problem's other image lookup; the
+// adjustment must be the same: to the bit with Parallax's solvers, which see the same problem
+// in the same order, and to rounding with Ceres, which orders its blocks by address.
+TEST_P(BundleAdjustmentSolvers, ScatteredImageIdsGiveTheSameAdjustment) {
+  SetPRNGSeed(11);
+  const Reconstruction truth = SynthesizeScene({});
+  constexpr image_t kFactor = 400000000;
+  BundleAdjustmentConfig config, scattered_config;
+  for (image_t image_id = 3; image_id <= 8; ++image_id) {
+    config.AddImage(image_id);
+    scattered_config.AddImage(image_id * kFactor);
+  }
+  Reconstruction estimate = truth;
+  Perturb(config, 1.0, 0.05, 0.05, &estimate);
+  Reconstruction scattered = WithImageIdsTimes(estimate, kFactor);
+  const BundleAdjustmentOptions options = TightOptions(GetParam());
+  ASSERT_TRUE(BundleAdjust(options, config, &estimate).success);
+  ASSERT_TRUE(BundleAdjust(options, scattered_config, &scattered).success);
+  const bool ceres = GetParam() == BundleAdjustmentSolver::kCeres ||
+                     GetParam() == BundleAdjustmentSolver::kCeresIterative;
+  const double tolerance = ceres ? 1e-9 : 0.0;
+  for (const auto& [image_id, image] : estimate.Images()) {
+    const Rigid3d& pose = scattered.GetImage(image_id * kFactor).cam_from_world;
+    EXPECT_LE((pose.rotation.coeffs() - image.cam_from_world.rotation.coeffs()).norm(), tolerance)
+        << image_id;
+    EXPECT_LE((pose.translation - image.cam_from_world.translation).norm(), tolerance) << image_id;
+  }
+  for (const auto& [point3D_id, point] : estimate.Points3D()) {
+    EXPECT_LE((scattered.GetPoint3D(point3D_id).xyz - point.xyz).norm(), tolerance) << point3D_id;
+  }
+  EXPECT_LT(CompareToTruth(truth, estimate).max_point, 1e-6);
+}
+
 TEST_P(BundleAdjustmentSolvers, ConstantCamerasAndPointsStayFixed) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
