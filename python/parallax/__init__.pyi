@@ -244,6 +244,8 @@ def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: 
         ratio: float = ...,
         no_cross_check: bool = ...,
         max_error: float = ...,
+        confidence: float = ...,
+        max_num_trials: int = ...,
         match_batch_size: int = ...,
         ) -> MatchResult: ...
 
@@ -316,6 +318,8 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         ratio: float = ...,
         no_cross_check: bool = ...,
         max_error: float = ...,
+        confidence: float = ...,
+        max_num_trials: int = ...,
         match_batch_size: int = ...,
         input_model: Union[str, os.PathLike] = ...,
         init_min_inliers: int = ...,

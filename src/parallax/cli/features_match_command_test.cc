@@ -138,6 +138,15 @@ TEST_F(FeaturesMatchCommandTest, BadInputGivesOneLineErrors) {
       Run("match --database '" + (dir_ / "a.db").string() + "' --pairs vocab_tree");
   EXPECT_NE(bad_mode.exit_code, 0);
 
+  // A confidence of 1 would ask RANSAC for infinitely many trials: refused as an option error.
+  for (const char* confidence : {"1", "0.2"}) {
+    const CommandResult bad_confidence =
+        Run("match --database '" + (dir_ / "a.db").string() + "' --confidence " + confidence);
+    EXPECT_NE(bad_confidence.exit_code, 0) << confidence;
+    EXPECT_GE(bad_confidence.exit_code, 0) << "killed by a signal: " << bad_confidence.err;
+    EXPECT_NE(bad_confidence.err.find("--confidence"), std::string::npos) << bad_confidence.err;
+  }
+
   const fs::path bad_k = dir_ / "K.txt";
   std::ofstream(bad_k) << "1 2 3\n";
   WriteWarpedViews(dir_ / "images", 1);

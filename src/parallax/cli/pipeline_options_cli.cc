@@ -1,5 +1,8 @@
 #include "parallax/cli/pipeline_options_cli.h"
 
+#include <cstdlib>
+#include <string>
+
 #include "parallax/cli/mapper_options_cli.h"
 #include "parallax/pipeline/camera_setup.h"
 
@@ -172,6 +175,17 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
                "Keep matches that are not mutual");
   app.add_option("--max-error", options->geometry.ransac.max_error,
                  "Geometric verification RANSAC threshold, pixels")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--confidence", options->geometry.ransac.confidence,
+                 "Geometric verification RANSAC confidence (COLMAP's SiftMatching.confidence)")
+      ->capture_default_str()
+      ->check([](const std::string& text) -> std::string {
+        const double value = std::atof(text.c_str());
+        return value >= 0.5 && value < 1.0 ? "" : "must be at least 0.5 and below 1";
+      });
+  app.add_option("--max-num-trials", options->geometry.ransac.max_num_trials,
+                 "Geometric verification RANSAC trials at most, per model (E, F, H)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--match-batch-size", options->batch_size,
