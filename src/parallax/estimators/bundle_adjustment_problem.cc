@@ -44,12 +44,10 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
   const size_t num_slots = dense_ids ? max_id + 1 : images.size();
   std::unordered_map<image_t, size_t> rank_of_id;
   std::vector<Image*> image_in_slot(num_slots, nullptr);
-  std::vector<image_t> id_in_slot(num_slots, kInvalidImageId);
   for (const auto& [image_id, image] : images) {
     const size_t slot = dense_ids ? image_id : rank_of_id.size();
     if (!dense_ids) rank_of_id.emplace(image_id, slot);
     image_in_slot[slot] = &reconstruction->GetImage(image_id);
-    id_in_slot[slot] = image_id;
   }
   const auto slot_of = [&](image_t image_id) {
     size_t slot = num_slots;
@@ -118,7 +116,7 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
   };
   for (const image_t image_id : config.images) add_pose(image_id, false);
   for (size_t slot = 0; slot < num_slots; ++slot) {  // Slots are in id order.
-    if (is_outside[slot]) add_pose(id_in_slot[slot], true);
+    if (is_outside[slot]) add_pose(image_in_slot[slot]->image_id, true);
   }
   std::map<camera_t, int> camera_index;
   const auto add_camera = [&](camera_t camera_id, bool constant) {
@@ -168,8 +166,8 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
                       static_cast<int>(j));
     }
   }
-  for (const BundleAdjustmentProblem::Pose& pose : problem.poses) {
-    if (pose.num_observations > 0 && in_config[slot_of(pose.image_id)]) ++problem.num_config_images;
+  for (size_t i = 0; i < config.images.size(); ++i) {  // The config's poses come first.
+    if (problem.poses[i].num_observations > 0) ++problem.num_config_images;
   }
   return problem;
 }

@@ -8,20 +8,21 @@ namespace {
 constexpr int kNumLevels = 3;
 constexpr int kLevelOffset[kNumLevels] = {0, 4, 20};
 
+// Cells per side of the level's grid; a cell at a finer level is worth more.
+constexpr int GridSize(int level) { return 2 << level; }
+
 // The cell of the keypoint at each level of the pyramid (indices into one array of all
-// three grids); a finer level's cell is worth its grid's size.
+// three grids).
 std::array<int, kNumLevels> CellsOf(const Eigen::Vector2d& xy, double width, double height) {
   std::array<int, kNumLevels> cells;
   for (int level = 0; level < kNumLevels; ++level) {
-    const int size = 2 << level;
+    const int size = GridSize(level);
     const int cx = std::clamp(static_cast<int>(xy.x() / width * size), 0, size - 1);
     const int cy = std::clamp(static_cast<int>(xy.y() / height * size), 0, size - 1);
     cells[level] = kLevelOffset[level] + cy * size + cx;
   }
   return cells;
 }
-
-constexpr int GridSize(int level) { return 2 << level; }
 
 // Ties between equally spread images go to the one seeing more points.
 double ScoreOf(double cells_score, size_t num_visible) {
