@@ -41,13 +41,17 @@ AbsolutePoseReport EstimateAbsolutePose(const Camera& camera,
 struct AbsolutePoseRefinementOptions {
   double loss_scale_px = 1.0;  // Cauchy loss scale on reprojection error, pixels.
   int max_num_iterations = 100;
+  // With the intrinsics constant (the mapper's case), stops after a step that lowered the
+  // robust cost by at most this fraction of it.
+  double min_relative_decrease = 1e-10;
   bool refine_focal_length = false;
   bool refine_extra_params = false;
   void Check() const;
 };
 
-// Non-linear refinement (Ceres, Levenberg-Marquardt) of the pose on the inliers, optionally
-// with the camera's focal length and distortion. False when the solver failed.
+// Non-linear refinement (Levenberg-Marquardt) of the pose on the inliers under a Cauchy loss,
+// optionally with the camera's focal length and distortion (then through Ceres). False when
+// the solver failed.
 bool RefineAbsolutePose(const AbsolutePoseRefinementOptions& options,
                         const std::vector<char>& inlier_mask,
                         const std::vector<Eigen::Vector2d>& points2D,

@@ -184,6 +184,39 @@ TEST(RefineAbsolutePose, ImprovesPerturbedPose) {
   EXPECT_NEAR(pose.rotation.norm(), 1, 1e-12);
 }
 
+// With the intrinsics constant the refinement is its own Levenberg-Marquardt: it must end at
+// a minimum of the robust cost, also with outliers kept among the inliers it is given.
+TEST(RefineAbsolutePose, EndsAtAMinimumOfTheRobustCost) {
+  const AbsolutePoseRefinementOptions options;
+  for (CameraModelId model_id : {CameraModelId::kSimpleRadial, CameraModelId::kOpenCV}) {
+    const Scene scene = RandomScene(MakeCamera(model_id), 400, 1.0, 0.1);
+    const std::vector<char> all(scene.points2D.size(), 1);
+    Rigid3d pose = scene.cam_from_world;
+    pose.rotation = pose.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(
+                                        0.01, Eigen::Vector3d(-1, 2, 1).normalized()));
+    pose.translation += Eigen::Vector3d(-0.03, 0.02, 0.05);
+    Camera camera = scene.camera;
+    ASSERT_TRUE(RefineAbsolutePose(options, all, scene.points2D, scene.points3D, &pose, &camera));
+    const double cost = CauchyCost(scene, all, pose, options.loss_scale_px);
+    // No small move along any of the six degrees of freedom lowers the cost.
+    for (int axis = 0; axis < 6; ++axis) {
+      for (double sign : {-1.0, 1.0}) {
+        Rigid3d moved = pose;
+        if (axis < 3) {
+          moved.rotation =
+              Eigen::Quaterniond(Eigen::AngleAxisd(sign * 1e-5, Eigen::Vector3d::Unit(axis))) *
+              pose.rotation;
+        } else {
+          moved.translation(axis - 3) += sign * 1e-5 * pose.translation.norm();
+        }
+        EXPECT_GE(CauchyCost(scene, all, moved, options.loss_scale_px), cost * (1 - 1e-12))
+            << "axis " << axis << " sign " << sign;
+      }
+    }
+    EXPECT_LT(RotationErrorDegrees(pose, scene.cam_from_world), 0.05);
+  }
+}
+
 TEST(RefineAbsolutePose, RefinesFocalLengthWithPrincipalPointFixed) {
   const Scene scene = RandomScene(MakeCamera(CameraModelId::kSimpleRadial), 400, 0.5, 0.3);
   Camera camera = scene.camera;

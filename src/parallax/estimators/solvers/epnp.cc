@@ -10,6 +10,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "parallax/estimators/solvers/pose_levenberg_marquardt.h"
 #include "parallax/math/dense_decompositions.h"
 #include "parallax/math/eigen_types.h"
 #include "parallax/util/check.h"
@@ -263,12 +264,6 @@ bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
   return best_cost < std::numeric_limits<double>::max();
 }
 
-Matrix3d SkewSymmetric(const Vector3d& v) {
-  Matrix3d skew;
-  skew << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return skew;
-}
-
 }  // namespace
 
 bool RefineAbsolutePoseLeastSquares(const std::vector<Eigen::Vector2d>& points2D,
@@ -277,65 +272,28 @@ bool RefineAbsolutePoseLeastSquares(const std::vector<Eigen::Vector2d>& points2D
   PARALLAX_CHECK_EQ(points2D.size(), points3D.size());
   Matrix3d rotation = cam_from_world->rotation.normalized().toRotationMatrix();
   Vector3d translation = cam_from_world->translation;
-  size_t num_in_front = 0;
-  double cost = ReprojectionCost(points2D, points3D, rotation, translation, &num_in_front);
-  if (num_in_front < 3 || !std::isfinite(cost)) return false;
-
-  double damping = 1e-4;
-  for (int iteration = 0; iteration < max_num_iterations; ++iteration) {
-    // Normal equations of the residuals pi(R X + t) - x for the update
-    // R <- exp([w]x) R, t <- t + dt.
-    Matrix6d hessian = Matrix6d::Zero();
-    Vector6d gradient = Vector6d::Zero();
-    for (size_t i = 0; i < points2D.size(); ++i) {
-      const Vector3d rotated = rotation * points3D[i];
-      const Vector3d point_in_cam = rotated + translation;
-      if (!(point_in_cam.z() > kMinDepth)) continue;
-      const double inverse_depth = 1 / point_in_cam.z();
-      const double u = point_in_cam.x() * inverse_depth, v = point_in_cam.y() * inverse_depth;
-      const Vector2d residual(u - points2D[i].x(), v - points2D[i].y());
-      Eigen::Matrix<double, 2, 3> projection_jacobian;
-      projection_jacobian << inverse_depth, 0, -u * inverse_depth, 0, inverse_depth,
-          -v * inverse_depth;
-      Eigen::Matrix<double, 2, 6> jacobian;
-      jacobian.leftCols<3>() = -projection_jacobian * SkewSymmetric(rotated);
-      jacobian.rightCols<3>() = projection_jacobian;
-      hessian.noalias() += jacobian.transpose() * jacobian;
-      gradient.noalias() += jacobian.transpose() * residual;
+  // Residuals pi(R X + t) - x on the normalised plane; the cost as ReprojectionCost sums it.
+  const auto observe = [&](size_t i, const Vector3d& point_in_cam, Vector2d* residual,
+                           Eigen::Matrix<double, 2, 3>* jacobian) {
+    if (!(point_in_cam.z() > kMinDepth)) return false;
+    if (jacobian == nullptr) {
+      *residual = point_in_cam.hnormalized() - points2D[i];
+      return true;
     }
-
-    bool accepted = false;
-    double new_cost = cost;
-    while (damping < 1e10) {
-      Matrix6d damped = hessian;
-      damped.diagonal() += damping * hessian.diagonal().cwiseMax(1e-12);
-      const Vector6d step = -damped.ldlt().solve(gradient);
-      if (!step.allFinite()) {
-        damping *= 10;
-        continue;
-      }
-      const double angle = step.head<3>().norm();
-      const Matrix3d step_rotation =
-          angle > 0 ? Eigen::AngleAxisd(angle, step.head<3>() / angle).toRotationMatrix()
-                    : Matrix3d::Identity();
-      const Matrix3d new_rotation = step_rotation * rotation;
-      const Vector3d new_translation = translation + step.tail<3>();
-      size_t new_num_in_front = 0;
-      new_cost =
-          ReprojectionCost(points2D, points3D, new_rotation, new_translation, &new_num_in_front);
-      if (new_num_in_front >= num_in_front && new_cost < cost) {
-        rotation = new_rotation;
-        translation = new_translation;
-        damping = std::max(damping / 10, 1e-12);
-        accepted = true;
-        break;
-      }
-      damping *= 10;
-    }
-    if (!accepted) break;
-    const double decrease = cost - new_cost;
-    cost = new_cost;
-    if (decrease <= 1e-12 * cost) break;
+    const double inverse_depth = 1 / point_in_cam.z();
+    const double u = point_in_cam.x() * inverse_depth, v = point_in_cam.y() * inverse_depth;
+    *residual = Vector2d(u - points2D[i].x(), v - points2D[i].y());
+    *jacobian << inverse_depth, 0, -u * inverse_depth, 0, inverse_depth, -v * inverse_depth;
+    return true;
+  };
+  struct SquaredLoss {
+    double Cost(double squared_norm) const { return squared_norm; }
+    double Weight(double) const { return 1; }
+  };
+  PoseLevenbergMarquardtOptions options;
+  options.max_num_iterations = max_num_iterations;
+  if (!MinimizeOverPose(points3D, observe, SquaredLoss(), options, &rotation, &translation)) {
+    return false;
   }
   cam_from_world->rotation = Eigen::Quaterniond(rotation).normalized();
   cam_from_world->translation = translation;
