@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "parallax/estimators/cost_functions/reprojection_error.h"
@@ -707,7 +708,8 @@ BundleAdjustmentSummary SchurSolver<ReducedMatrix>::Solve() {
     const double relative_decrease = cost_change / model_cost_change;
     if (std::isfinite(candidate_cost) && model_cost_change > 0 &&
         relative_decrease > kMinRelativeDecrease) {
-      parameters_ = std::move(candidate);
+      // A swap, not a move: the next ApplyStep then copies into storage it already has.
+      std::swap(parameters_, candidate);
       cost = Evaluate(parameters_, /*linearize=*/true);
       radius =
           std::min(kMaxRadius,
