@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "parallax/util/check.h"
+#include "parallax/util/types.h"
 
 namespace parallax {
 namespace {
@@ -37,10 +38,10 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
 
   // Images in flat tables by slot: the mapper gathers a problem around every new image, and
   // tree and hash lookups per observation were a twentieth of its time. The slot is the id
-  // where ids are dense (always, from the mapper), else the image's rank.
+  // where ids fit a flat table (always, from the mapper), else the image's rank.
   const std::map<image_t, Image>& images = reconstruction->Images();
   const size_t max_id = images.empty() ? 0 : static_cast<size_t>(images.rbegin()->first);
-  const bool dense_ids = max_id < 4 * images.size() + 1024;
+  const bool dense_ids = IdsFitFlatTable(max_id, images.size());
   const size_t num_slots = dense_ids ? max_id + 1 : images.size();
   std::unordered_map<image_t, size_t> rank_of_id;
   std::vector<Image*> image_in_slot(num_slots, nullptr);

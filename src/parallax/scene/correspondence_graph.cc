@@ -130,10 +130,9 @@ void CorrespondenceGraph::Finalize() {
 }
 
 void CorrespondenceGraph::BuildCorrespondenceLists(size_t num_nodes) {
-  // First node of every image by id, for lookups without the map (ids are dense in
-  // practice; sparse ones beyond a few times the image count fall back to the map).
+  // First node of every image by id, for lookups without the map.
   const image_t max_image_id = images_.empty() ? 0 : images_.rbegin()->first;
-  if (max_image_id < 4 * images_.size() + 1024) {
+  if (IdsFitFlatTable(max_image_id, images_.size())) {
     image_nodes_.assign(max_image_id + 1, {kNoImage, 0});
     for (const auto& [image_id, entry] : images_) {
       image_nodes_[image_id] = {entry.node_offset, entry.num_points2D};

@@ -71,7 +71,7 @@ void Reconstruction::IndexPoints3DBelow(size_t end) {
 void Reconstruction::IndexPoint3D(point3D_t point3D_id, Point3D* point) {
   if (point3D_id < point_index_.size()) {
     point_index_[point3D_id] = point;
-  } else if (point3D_id < 4 * (points3D_.size() + 1024)) {
+  } else if (IdsFitFlatTable(point3D_id, points3D_.size())) {
     IndexPoints3DBelow(std::max<size_t>(point3D_id + 1, 2 * point_index_.size()));
   }
 }

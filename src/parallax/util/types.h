@@ -32,6 +32,12 @@ inline std::pair<image_t, image_t> PairIdToImagePair(image_pair_t pair_id) {
   return {image_id1, image_id2};
 }
 
+// Whether objects numbered up to `max_id`, `count` of them, may be looked up in a flat table
+// indexed by id. Ids are dense in practice (the database and the mapper number from 1); ids
+// sparser than a few times the count would make the table mostly empty, so lookups stay in
+// the map that owns the objects.
+inline bool IdsFitFlatTable(uint64_t max_id, uint64_t count) { return max_id < 4 * count + 1024; }
+
 // True when the pair must be swapped to follow the (smaller id first) convention.
 inline bool SwapImagePair(image_t image_id1, image_t image_id2) { return image_id1 > image_id2; }
 
