@@ -8,7 +8,9 @@
 #   1. parallax mapper (defaults), timed, evaluated against the exact cameras;
 #   2. COLMAP 3.8 `colmap mapper` and, when ../shared/tools/colmap4 is set up, COLMAP 4.2's, on
 #      copies of the same database, for sizes up to PARALLAX_COLMAP_MAX_VIEWS (default 300: at
-#      1,000 views COLMAP 3.8 needs hours on 2 cores). PARALLAX_SKIP_COLMAP=1 leaves them out.
+#      1,000 views COLMAP 3.8 needs hours on 2 cores). PARALLAX_SKIP_COLMAP=1 leaves them out,
+#      PARALLAX_COLMAP_VERSIONS="3.8" runs only those named, and PARALLAX_COLMAP_TIMEOUT=SECONDS
+#      stops a COLMAP mapper that runs longer (its row then says it did not finish).
 # End to end is features + matching + Parallax's mapper. Errors are after a similarity
 # alignment to the ground truth: median rotation error and median centre error in % of the
 # scene's extent. Needs PARALLAX_BENCH_DEPS=1 scripts/install-deps.sh (GNU time, COLMAP 3.8).
@@ -85,16 +87,21 @@ EOF
   record parallax "$n" "$run/mapper.log" "$run/sparse" "$scene/images" "$extra"
 
   [[ "${PARALLAX_SKIP_COLMAP:-0}" == "1" || "$n" -gt "${PARALLAX_COLMAP_MAX_VIEWS:-300}" ]] && continue
-  for tool in colmap-3.8 colmap-4.2; do
+  for version in ${PARALLAX_COLMAP_VERSIONS:-3.8 4.2}; do
+    tool="colmap-$version"
     colmap_binary=colmap
-    [[ $tool == colmap-4.2 ]] && colmap_binary="$colmap4"
+    [[ $version == 4.2 ]] && colmap_binary="$colmap4"
     command -v "$colmap_binary" >/dev/null || { echo "$bench_name: $tool missing, skipped" >&2; continue; }
     run="$scene/$tool"
     rm -rf "$run" && mkdir -p "$run/sparse"
     cp "$scene/database.db" "$run/database.db"
     echo "$bench_name: $tool mapper ($n views)" >&2
-    timed "$run/mapper.log" "$colmap_binary" mapper --database_path "$run/database.db" \
-      --image_path "$scene/images" --output_path "$run/sparse"
+    if ! timed "$run/mapper.log" timeout "${PARALLAX_COLMAP_TIMEOUT:-0}" "$colmap_binary" mapper \
+      --database_path "$run/database.db" --image_path "$scene/images" --output_path "$run/sparse"; then
+      echo "$bench_name: $tool did not finish $n views within ${PARALLAX_COLMAP_TIMEOUT:-0} s" >&2
+      echo "{\"tool\": \"$tool\", \"views\": $n, \"unfinished_after_s\": ${PARALLAX_COLMAP_TIMEOUT:-0}}" >>"$results"
+      continue
+    fi
     record "$tool" "$n" "$run/mapper.log" "$run/sparse" "$scene/images" "{}"
   done
 done
@@ -106,6 +113,9 @@ python3 - "$results" <<'EOF'
 import json, sys
 for line in open(sys.argv[1]):
     r = json.loads(line)
+    if "unfinished_after_s" in r:
+        print("| %d | %s | did not finish in %d s | | | | | | | |" % (r["views"], r["tool"], r["unfinished_after_s"]))
+        continue
     share = "%.0f %%" % (100 * r["ba_share"]) if "ba_share" in r else ""
     total = "%.0f" % r["end_to_end_s"] if "end_to_end_s" in r else ""
     print("| %d | %s | %.1f | %d | %s | %s | %d | %d | %.4f | %.4f |" % (
