@@ -24,6 +24,7 @@ views=("$@")
 mkdir -p "$out"
 results="$out/results.jsonl"
 colmap4="$repo/../shared/tools/colmap4/bin/colmap"
+colmap_timeout="${PARALLAX_COLMAP_TIMEOUT:-0}" # seconds; 0: no limit
 
 # Runs a command under GNU time into LOG; LOG.time holds "wall_seconds peak_kb".
 timed() {
@@ -96,12 +97,17 @@ EOF
     rm -rf "$run" && mkdir -p "$run/sparse"
     cp "$scene/database.db" "$run/database.db"
     echo "$bench_name: $tool mapper ($n views)" >&2
-    if ! timed "$run/mapper.log" timeout "${PARALLAX_COLMAP_TIMEOUT:-0}" "$colmap_binary" mapper \
-      --database_path "$run/database.db" --image_path "$scene/images" --output_path "$run/sparse"; then
-      echo "$bench_name: $tool did not finish $n views within ${PARALLAX_COLMAP_TIMEOUT:-0} s" >&2
-      echo "{\"tool\": \"$tool\", \"views\": $n, \"unfinished_after_s\": ${PARALLAX_COLMAP_TIMEOUT:-0}}" >>"$results"
+    status=0
+    timed "$run/mapper.log" timeout "$colmap_timeout" "$colmap_binary" mapper \
+      --database_path "$run/database.db" --image_path "$scene/images" --output_path "$run/sparse" ||
+      status=$?
+    # 124 is timeout's own status; any other failure of COLMAP still stops the bench.
+    if [[ $status -eq 124 ]]; then
+      echo "$bench_name: $tool did not finish $n views within $colmap_timeout s" >&2
+      echo "{\"tool\": \"$tool\", \"views\": $n, \"unfinished_after_s\": $colmap_timeout}" >>"$results"
       continue
     fi
+    [[ $status -eq 0 ]] || exit "$status"
     record "$tool" "$n" "$run/mapper.log" "$run/sparse" "$scene/images" "{}"
   done
 done
