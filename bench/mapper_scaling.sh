@@ -8,7 +8,7 @@
 #   1. parallax mapper (defaults), timed, evaluated against the exact cameras;
 #   2. COLMAP 3.8 `colmap mapper` and, when ../shared/tools/colmap4 is set up, COLMAP 4.2's, on
 #      copies of the same database, for sizes up to PARALLAX_COLMAP_MAX_VIEWS (default 300: at
-#      1,000 views COLMAP 3.8 needs hours on 2 cores). PARALLAX_SKIP_COLMAP=1 leaves them out,
+#      1,000 views COLMAP 3.8 took 76 minutes on 2 cores). PARALLAX_SKIP_COLMAP=1 leaves them out,
 #      PARALLAX_COLMAP_VERSIONS="3.8" runs only those named, and PARALLAX_COLMAP_TIMEOUT=SECONDS
 #      stops a COLMAP mapper that runs longer (its row then says it did not finish).
 # End to end is features + matching + Parallax's mapper. Errors are after a similarity
@@ -103,8 +103,11 @@ EOF
       status=$?
     # 124 is timeout's own status; any other failure of COLMAP still stops the bench.
     if [[ $status -eq 124 ]]; then
-      echo "$bench_name: $tool did not finish $n views within $colmap_timeout s" >&2
-      echo "{\"tool\": \"$tool\", \"views\": $n, \"unfinished_after_s\": $colmap_timeout}" >>"$results"
+      # COLMAP logs "Registering image #ID (K)" before it tries its K-th image.
+      reached=$(sed -n 's/^Registering image #[0-9]* (\([0-9]*\))$/\1/p' "$run/mapper.log" | tail -1)
+      registered=$((${reached:-1} - 1))
+      echo "$bench_name: $tool did not finish $n views within $colmap_timeout s ($registered registered)" >&2
+      echo "{\"tool\": \"$tool\", \"views\": $n, \"unfinished_after_s\": $colmap_timeout, \"registered_when_stopped\": $registered}" >>"$results"
       continue
     fi
     [[ $status -eq 0 ]] || exit "$status"
@@ -120,7 +123,8 @@ import json, sys
 for line in open(sys.argv[1]):
     r = json.loads(line)
     if "unfinished_after_s" in r:
-        print("| %d | %s | did not finish in %d s | | | | | | | |" % (r["views"], r["tool"], r["unfinished_after_s"]))
+        print("| %d | %s | did not finish in %d s | | | | %s when stopped | | | |" % (
+            r["views"], r["tool"], r["unfinished_after_s"], r.get("registered_when_stopped", "")))
         continue
     share = "%.0f %%" % (100 * r["ba_share"]) if "ba_share" in r else ""
     total = "%.0f" % r["end_to_end_s"] if "end_to_end_s" in r else ""
