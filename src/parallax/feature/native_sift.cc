@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 
+#include "parallax/feature/gaussian_blur.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
@@ -49,6 +52,10 @@ struct Gradient {
 // keeps one between images).
 struct NativeSiftScaleSpace {
   cv::Mat input, doubled;
+  cv::Mat base;  // input or doubled.
+  int first_octave = 0;
+  std::vector<double> increments;  // Blur from layer k - 1 to layer k.
+  double first_blur = 0;           // Blur from the base image to the first layer.
   std::vector<Octave> octaves;
   // Sized for the first octave; later octaves use their top-left corner.
   std::vector<cv::Mat> dog_buffers;
@@ -61,36 +68,73 @@ namespace {
 
 using ScaleSpace = NativeSiftScaleSpace;
 
+constexpr int kGradientBandRows = 16;
+
+// The columns of each band of kGradientBandRows rows of a layer that some frame reads
+// (empty where none does): on a photo whose texture fills part of the frame, most of a
+// layer's gradient is never read.
+class GradientRegion {
+ public:
+  explicit GradientRegion(cv::Size layer_size)
+      : layer_size_(layer_size),
+        begin_((layer_size.height + kGradientBandRows - 1) / kGradientBandRows, layer_size.width),
+        end_(begin_.size(), 0) {}
+
+  // The square of half-side `radius` around (xi, yi).
+  void AddSquare(int xi, int yi, int radius) {
+    const int row_begin = std::max(0, yi - radius);
+    const int row_end = std::min(layer_size_.height - 1, yi + radius);
+    const int col_begin = std::max(0, xi - radius);
+    const int col_end = std::min(layer_size_.width - 1, xi + radius) + 1;
+    if (row_begin > row_end || col_begin >= col_end) return;
+    for (int band = row_begin / kGradientBandRows; band <= row_end / kGradientBandRows; ++band) {
+      begin_[band] = std::min(begin_[band], col_begin);
+      end_[band] = std::max(end_[band], col_end);
+    }
+  }
+  int NumBands() const { return static_cast<int>(begin_.size()); }
+  int ColumnBegin(int band) const { return begin_[band]; }
+  int ColumnEnd(int band) const { return end_[band]; }
+
+ private:
+  cv::Size layer_size_;
+  std::vector<int> begin_, end_;
+};
+
 // The gradient of one Gaussian layer, by central differences (zero on the one-pixel border),
-// in the corners of the shared buffers. Bands of rows keep the differences in cache.
-Gradient LayerGradient(const cv::Mat& image, ScaleSpace* space) {
-  constexpr int kBandRows = 16;
+// in the corners of the shared buffers, computed only in `region` (elsewhere the buffers
+// hold whatever they held). Bands of rows keep the differences in cache.
+Gradient LayerGradient(const cv::Mat& image, const GradientRegion& region, ScaleSpace* space) {
   const cv::Rect corner(cv::Point(0, 0), image.size());
   Gradient gradient{space->magnitude_buffer(corner), space->angle_buffer(corner)};
-  space->dx_rows.create(kBandRows, space->magnitude_buffer.cols, CV_32F);
-  space->dy_rows.create(kBandRows, space->magnitude_buffer.cols, CV_32F);
-  for (int band = 0; band < image.rows; band += kBandRows) {
-    const int band_rows = std::min(kBandRows, image.rows - band);
+  space->dx_rows.create(kGradientBandRows, space->magnitude_buffer.cols, CV_32F);
+  space->dy_rows.create(kGradientBandRows, space->magnitude_buffer.cols, CV_32F);
+  for (int b = 0; b < region.NumBands(); ++b) {
+    const int col_begin = region.ColumnBegin(b), col_end = region.ColumnEnd(b);
+    if (col_begin >= col_end) continue;
+    const int band = b * kGradientBandRows;
+    const int band_rows = std::min(kGradientBandRows, image.rows - band);
     for (int i = 0; i < band_rows; ++i) {
       const int r = band + i;
       float* gx = space->dx_rows.ptr<float>(i);
       float* gy = space->dy_rows.ptr<float>(i);
       if (r == 0 || r + 1 == image.rows) {
-        std::fill(gx, gx + image.cols, 0.0f);
-        std::fill(gy, gy + image.cols, 0.0f);
+        std::fill(gx + col_begin, gx + col_end, 0.0f);
+        std::fill(gy + col_begin, gy + col_end, 0.0f);
         continue;
       }
       const float* above = image.ptr<float>(r - 1);
       const float* row = image.ptr<float>(r);
       const float* below = image.ptr<float>(r + 1);
-      gx[0] = gy[0] = gx[image.cols - 1] = gy[image.cols - 1] = 0;
-      for (int c = 1; c + 1 < image.cols; ++c) {
+      for (int c = std::max(col_begin, 1); c < std::min(col_end, image.cols - 1); ++c) {
         gx[c] = 0.5f * (row[c + 1] - row[c - 1]);
         gy[c] = 0.5f * (below[c] - above[c]);
       }
+      if (col_begin == 0) gx[0] = gy[0] = 0;
+      if (col_end == image.cols) gx[image.cols - 1] = gy[image.cols - 1] = 0;
     }
-    const cv::Rect band_in_buffer(0, 0, image.cols, band_rows);
-    const cv::Rect band_in_image(0, band, image.cols, band_rows);
+    const cv::Rect band_in_buffer(col_begin, 0, col_end - col_begin, band_rows);
+    const cv::Rect band_in_image(col_begin, band, col_end - col_begin, band_rows);
     cv::Mat magnitude = gradient.magnitude(band_in_image), angle = gradient.angle(band_in_image);
     cv::cartToPolar(space->dx_rows(band_in_buffer), space->dy_rows(band_in_buffer), magnitude,
                     angle, /*angleInDegrees=*/false);
@@ -98,69 +142,65 @@ Gradient LayerGradient(const cv::Mat& image, ScaleSpace* space) {
   return gradient;
 }
 
-// Builds the octaves: layer k of every octave has sigma * 2^(k / S) in that octave's pixels,
-// each layer blurred from the one below it; the next octave starts from layer S (twice the
-// first layer's blur) sampled at every other pixel.
-void BuildScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, ScaleSpace* space) {
+// The base image of the scale space (the input as floats in [0, 1], doubled for octave -1)
+// and the octaves' layout, with buffers sized for the first octave.
+void PrepareScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, ScaleSpace* space) {
   gray.convertTo(space->input, CV_32F, 1.0 / 255.0);
-  const cv::Mat* base = &space->input;
+  space->base = space->input;
   // A camera image is taken to carry a blur of half a pixel already (Lowe's assumption).
   double input_blur = 0.5;
-  int first_octave = 0;
+  space->first_octave = 0;
   if (options.double_first_octave) {
     cv::resize(space->input, space->doubled, cv::Size(2 * gray.cols, 2 * gray.rows), 0, 0,
                cv::INTER_LINEAR);
-    base = &space->doubled;
+    space->base = space->doubled;
     input_blur = 1.0;
-    first_octave = -1;
+    space->first_octave = -1;
   }
   int num_octaves = 0;
-  for (int rows = base->rows, cols = base->cols; std::min(rows, cols) >= kSmallestOctaveSide;
-       rows /= 2, cols /= 2) {
+  for (int rows = space->base.rows, cols = space->base.cols;
+       std::min(rows, cols) >= kSmallestOctaveSide; rows /= 2, cols /= 2) {
     ++num_octaves;
   }
   const int layers = options.num_octave_layers;
   space->octaves.resize(num_octaves);
-  if (num_octaves == 0) return;
-
-  std::vector<double> increments(layers + 3, 0.0);
+  space->increments.assign(layers + 3, 0.0);
   for (int k = 1; k < layers + 3; ++k) {
     const double previous = options.sigma * std::pow(2.0, (k - 1.0) / layers);
     const double current = options.sigma * std::pow(2.0, static_cast<double>(k) / layers);
-    increments[k] = std::sqrt(current * current - previous * previous);
+    space->increments[k] = std::sqrt(current * current - previous * previous);
   }
-  const double first_blur =
+  space->first_blur =
       std::sqrt(std::max(options.sigma * options.sigma - input_blur * input_blur, 0.01));
-  for (int o = 0; o < num_octaves; ++o) {
-    Octave& octave = space->octaves[o];
-    octave.index = first_octave + o;
-    octave.gaussians.resize(layers + 3);
-    if (o == 0) {
-      cv::GaussianBlur(*base, octave.gaussians[0], cv::Size(), first_blur, first_blur,
-                       cv::BORDER_REPLICATE);
-    } else {
-      const cv::Mat& previous = space->octaves[o - 1].gaussians[layers];
-      cv::resize(previous, octave.gaussians[0], cv::Size(previous.cols / 2, previous.rows / 2), 0,
-                 0, cv::INTER_NEAREST);
-    }
-    for (int k = 1; k < layers + 3; ++k) {
-      cv::GaussianBlur(octave.gaussians[k - 1], octave.gaussians[k], cv::Size(), increments[k],
-                       increments[k], cv::BORDER_REPLICATE);
-    }
-  }
+  const cv::Size size = space->base.size();
   space->dog_buffers.resize(layers + 2);
-  for (cv::Mat& buffer : space->dog_buffers) buffer.create(base->size(), CV_32F);
-  space->magnitude_buffer.create(base->size(), CV_32F);
-  space->angle_buffer.create(base->size(), CV_32F);
+  for (cv::Mat& buffer : space->dog_buffers) buffer.create(size, CV_32F);
+  space->magnitude_buffer.create(size, CV_32F);
+  space->angle_buffer.create(size, CV_32F);
 }
 
-// The differences of Gaussians of one octave, in the corners of the shared buffers.
-std::vector<cv::Mat> DifferencesOfGaussians(const Octave& octave, ScaleSpace* space) {
+// Builds octave o (after o - 1) and returns its differences of Gaussians, in the corners of
+// the shared buffers (valid until the next octave is built): layer k has sigma * 2^(k / S) in
+// the octave's pixels, each layer blurred from the one below it, and the octave starts from
+// the previous one's layer S (twice its first layer's blur) sampled at every other pixel.
+// Each difference is taken as its layer is blurred, while the rows are in cache.
+std::vector<cv::Mat> BuildOctave(int o, ScaleSpace* space) {
+  Octave& octave = space->octaves[o];
+  const int num_layers = static_cast<int>(space->increments.size());
+  octave.index = space->first_octave + o;
+  octave.gaussians.resize(num_layers);
+  if (o == 0) {
+    GaussianBlur(space->base, space->first_blur, &octave.gaussians[0]);
+  } else {
+    const cv::Mat& previous = space->octaves[o - 1].gaussians[num_layers - 3];
+    cv::resize(previous, octave.gaussians[0], cv::Size(previous.cols / 2, previous.rows / 2), 0, 0,
+               cv::INTER_NEAREST);
+  }
   std::vector<cv::Mat> dogs;
-  const cv::Size size = octave.gaussians[0].size();
-  for (size_t k = 0; k + 1 < octave.gaussians.size(); ++k) {
-    cv::Mat dog = space->dog_buffers[k](cv::Rect(cv::Point(0, 0), size));
-    cv::subtract(octave.gaussians[k + 1], octave.gaussians[k], dog);
+  const cv::Rect corner(cv::Point(0, 0), octave.gaussians[0].size());
+  for (int k = 1; k < num_layers; ++k) {
+    cv::Mat dog = space->dog_buffers[k - 1](corner);
+    GaussianBlur(octave.gaussians[k - 1], space->increments[k], &octave.gaussians[k], &dog);
     dogs.push_back(dog);
   }
   return dogs;
@@ -191,21 +231,31 @@ bool IsLocalExtremum(const std::vector<cv::Mat>& dogs, int layer, int r, int c) 
          !beaten_in(dogs[layer + 1], false);
 }
 
-// candidates[c] = 1 where sample (r, c) passes the contrast screen and is an extremum of its
-// row: the cheap tests, in a loop without branches that the compiler vectorises, so that
-// IsLocalExtremum sees a few samples of each row instead of all.
+// candidates[c] = 1 where sample (r, c) passes the contrast screen and is an extremum of the
+// 3 x 3 samples around it in its own layer: the cheap tests, in a loop without branches that
+// the compiler vectorises, so that IsLocalExtremum sees a few samples of each row instead of
+// all. Needs rows r - 1 and r + 1.
 void ScreenRow(const cv::Mat& dog, int r, float screen, std::vector<uint8_t>* candidates) {
   const int cols = dog.cols;
   candidates->assign(cols, 0);
-  const float* row = dog.ptr<float>(r);
-  uint8_t* out = candidates->data();
+  const float* __restrict above = dog.ptr<float>(r - 1);
+  const float* __restrict row = dog.ptr<float>(r);
+  const float* __restrict below = dog.ptr<float>(r + 1);
+  uint8_t* __restrict out = candidates->data();
+  // Ternaries, not std::max/min, which the compiler does not turn into vector max/min.
+  const auto max2 = [](float a, float b) { return a > b ? a : b; };
+  const auto min2 = [](float a, float b) { return a < b ? a : b; };
   for (int c = 1; c + 1 < cols; ++c) {
-    const float v = row[c], left = row[c - 1], right = row[c + 1];
+    const float v = row[c];
+    const float neighbours_max =
+        max2(max2(max2(above[c - 1], above[c]), max2(above[c + 1], row[c - 1])),
+             max2(max2(row[c + 1], below[c - 1]), max2(below[c], below[c + 1])));
+    const float neighbours_min =
+        min2(min2(min2(above[c - 1], above[c]), min2(above[c + 1], row[c - 1])),
+             min2(min2(row[c + 1], below[c - 1]), min2(below[c], below[c + 1])));
     // Bitwise, not logical, operators: no branch, so the loop vectorises.
-    const int maximum =
-        static_cast<int>(v > screen) & static_cast<int>(v >= left) & static_cast<int>(v >= right);
-    const int minimum =
-        static_cast<int>(v < -screen) & static_cast<int>(v <= left) & static_cast<int>(v <= right);
+    const int maximum = static_cast<int>(v > screen) & static_cast<int>(v >= neighbours_max);
+    const int minimum = static_cast<int>(v < -screen) & static_cast<int>(v <= neighbours_min);
     out[c] = static_cast<uint8_t>(maximum | minimum);
   }
 }
@@ -300,6 +350,20 @@ bool RefineExtremum(const std::vector<cv::Mat>& dogs, const NativeSiftOptions& o
   return true;
 }
 
+// Half-sides of the square of gradient samples around (round(x), round(y)) that a frame's
+// orientation histogram and its descriptor read.
+int OrientationRadius(float octave_scale) {
+  return std::max(1, static_cast<int>(std::lround(3.0f * kOrientationWindow * octave_scale)));
+}
+
+int DescriptorRadius(float octave_scale, cv::Size layer_size) {
+  const float bin_side = kDescriptorMagnification * octave_scale;
+  const int max_radius = static_cast<int>(std::sqrt(static_cast<float>(
+      layer_size.height * layer_size.height + layer_size.width * layer_size.width)));
+  return std::min(max_radius, static_cast<int>(std::lround(bin_side * std::sqrt(2.0f) *
+                                                           (kDescriptorGrid + 1) * 0.5f)));
+}
+
 // Gaussian weights exp(-d^2 / (2 sigma^2)) for d = i - fraction, i = -radius..radius: a 2D
 // Gaussian window is the product of two of these, so a frame costs 2 (2 radius + 1) exps.
 void GaussianWeights(int radius, float fraction, float sigma, std::vector<float>* weights) {
@@ -319,7 +383,7 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
   const cv::Mat& magnitude = gradient.magnitude;
   const cv::Mat& angle = gradient.angle;
   const float window_sigma = kOrientationWindow * octave_scale;
-  const int radius = std::max(1, static_cast<int>(std::lround(3.0f * window_sigma)));
+  const int radius = OrientationRadius(octave_scale);
   const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
   std::vector<float> weights_x, weights_y;
   GaussianWeights(radius, x - xi, window_sigma, &weights_x);
@@ -418,11 +482,7 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
   const cv::Mat& angle = gradient.angle;
   const float bin_side = kDescriptorMagnification * octave_scale;
   const float half_grid = 0.5f * kDescriptorGrid;
-  const int max_radius = static_cast<int>(std::sqrt(
-      static_cast<float>(magnitude.rows * magnitude.rows + magnitude.cols * magnitude.cols)));
-  const int radius = std::min(
-      max_radius,
-      static_cast<int>(std::lround(bin_side * std::sqrt(2.0f) * (kDescriptorGrid + 1) * 0.5f)));
+  const int radius = DescriptorRadius(octave_scale, magnitude.size());
   const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
   std::vector<float> weights_x, weights_y;
   GaussianWeights(radius, x - xi, half_grid * bin_side, &weights_x);
@@ -580,7 +640,7 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
   std::optional<NativeSiftBuffers> own_buffers;
   if (buffers == nullptr) buffers = &own_buffers.emplace();
   ScaleSpace& space = buffers->ScaleSpace();
-  BuildScaleSpace(gray, options, &space);
+  PrepareScaleSpace(gray, options, &space);
   const int layers = options.num_octave_layers;
   // Half the final threshold screens samples before the 26-neighbour test, as Lowe does.
   const float screen = static_cast<float>(0.5 * options.contrast_threshold / layers);
@@ -592,14 +652,23 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
   std::vector<Detection> extrema;
   std::vector<uint8_t> candidates;
   for (int o = 0; o < static_cast<int>(space.octaves.size()); ++o) {
+    const std::vector<cv::Mat> dogs = BuildOctave(o, &space);
     const Octave& octave = space.octaves[o];
-    const std::vector<cv::Mat> dogs = DifferencesOfGaussians(octave, &space);
     const float pixel_size = std::ldexp(1.0f, octave.index);
     const int rows = dogs[0].rows, cols = dogs[0].cols;
     for (int layer = 1; layer <= layers; ++layer) {
       for (int r = kImageBorder; r < rows - kImageBorder; ++r) {
         ScreenRow(dogs[layer], r, screen, &candidates);
         for (int c = kImageBorder; c < cols - kImageBorder; ++c) {
+          // Most samples fail the screen: skip them eight at a time.
+          if (c + 8 <= cols - kImageBorder) {
+            uint64_t eight;
+            std::memcpy(&eight, candidates.data() + c, sizeof(eight));
+            if (eight == 0) {
+              c += 7;
+              continue;
+            }
+          }
           if (!candidates[c] || !IsLocalExtremum(dogs, layer, r, c)) continue;
           Extremum extremum{layer, r, c};
           if (!RefineExtremum(dogs, options, &extremum)) continue;
@@ -645,8 +714,16 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
            extrema[end].layer == extrema[begin].layer) {
       ++end;
     }
-    const Gradient gradient =
-        LayerGradient(space.octaves[extrema[begin].octave].gaussians[extrema[begin].layer], &space);
+    const cv::Mat& layer = space.octaves[extrema[begin].octave].gaussians[extrema[begin].layer];
+    GradientRegion region(layer.size());
+    for (size_t i = begin; i < end; ++i) {
+      const Detection& extremum = extrema[i];
+      const int radius = std::max(OrientationRadius(extremum.octave_scale),
+                                  DescriptorRadius(extremum.octave_scale, layer.size()));
+      region.AddSquare(static_cast<int>(std::lround(extremum.x)),
+                       static_cast<int>(std::lround(extremum.y)), radius);
+    }
+    const Gradient gradient = LayerGradient(layer, region, &space);
     for (size_t i = begin; i < end; ++i) {
       const Detection& extremum = extrema[i];
       for (const float orientation :

@@ -1,0 +1,87 @@
+#include "parallax/feature/gaussian_blur.h"
+
+#include <gtest/gtest.h>
+
+#include <numeric>
+#include <opencv2/imgproc.hpp>
+
+#include "parallax/util/check.h"
+
+namespace parallax {
+namespace {
+
+cv::Mat RandomImage(int width, int height, uint64_t seed) {
+  cv::Mat image(height, width, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(image, cv::RNG::UNIFORM, 0.0f, 1.0f);
+  return image;
+}
+
+TEST(GaussianHalfKernel, IsOpenCvsKernelForFloatImages) {
+  for (const double sigma : {0.7, 1.23, 1.6, 3.09}) {
+    const std::vector<float> half = GaussianHalfKernel(sigma);
+    const int size = static_cast<int>(2 * half.size() - 1);
+    EXPECT_EQ(size, cvRound(sigma * 8 + 1) | 1) << sigma;
+    const cv::Mat expected = cv::getGaussianKernel(size, sigma, CV_32F);
+    for (size_t i = 0; i < half.size(); ++i) {
+      EXPECT_EQ(half[i], expected.at<float>(static_cast<int>(half.size() - 1 + i)));
+      EXPECT_EQ(half[i], expected.at<float>(static_cast<int>(half.size() - 1 - i)));
+    }
+    EXPECT_NEAR(std::accumulate(half.begin() + 1, half.end(), 0.0f) * 2 + half[0], 1.0f, 1e-6f);
+  }
+}
+
+// Sizes around the 32-sample blocks, and smaller than the kernel (every border replicated).
+TEST(GaussianBlur, MatchesOpenCvsReplicatedBorderBlur) {
+  const std::vector<cv::Size> sizes = {{640, 480}, {97, 33}, {32, 5}, {31, 64}, {5, 3}, {1, 1}};
+  uint64_t seed = 1;
+  for (const cv::Size& size : sizes) {
+    const cv::Mat image = RandomImage(size.width, size.height, seed++);
+    for (const double sigma : {1.23, 1.6, 3.09}) {
+      cv::Mat expected, blurred;
+      cv::GaussianBlur(image, expected, cv::Size(), sigma, sigma, cv::BORDER_REPLICATE);
+      GaussianBlur(image, sigma, &blurred);
+      ASSERT_EQ(blurred.size(), image.size());
+      ASSERT_EQ(blurred.type(), CV_32F);
+      EXPECT_LT(cv::norm(blurred, expected, cv::NORM_INF), 1e-6)
+          << size.width << "x" << size.height << " sigma " << sigma;
+    }
+  }
+}
+
+// A view is blurred as an image of its own (OpenCV's BORDER_ISOLATED): nothing outside it is
+// read.
+TEST(GaussianBlur, BlursAViewOfALargerImageAsAnImageOfItsOwn) {
+  const cv::Mat image = RandomImage(200, 100, 7);
+  const cv::Mat view = image(cv::Rect(13, 9, 150, 70));
+  cv::Mat expected, blurred;
+  cv::GaussianBlur(view.clone(), expected, cv::Size(), 2.0, 2.0, cv::BORDER_REPLICATE);
+  GaussianBlur(view, 2.0, &blurred);
+  EXPECT_LT(cv::norm(blurred, expected, cv::NORM_INF), 1e-6);
+}
+
+TEST(GaussianBlur, SpreadsAnImpulseAsTheKernelsOuterProduct) {
+  cv::Mat impulse = cv::Mat::zeros(41, 45, CV_32F);
+  impulse.at<float>(20, 22) = 1.0f;
+  cv::Mat blurred;
+  GaussianBlur(impulse, 1.6, &blurred);
+  const std::vector<float> half = GaussianHalfKernel(1.6);
+  const int radius = static_cast<int>(half.size()) - 1;
+  for (int dy = -radius; dy <= radius; ++dy) {
+    for (int dx = -radius; dx <= radius; ++dx) {
+      EXPECT_NEAR(blurred.at<float>(20 + dy, 22 + dx), half[std::abs(dy)] * half[std::abs(dx)],
+                  1e-7f);
+    }
+  }
+  EXPECT_NEAR(cv::sum(blurred)[0], 1.0, 1e-5);
+}
+
+TEST(GaussianBlur, RejectsItsInputAsOutputAndOtherTypes) {
+  cv::Mat image = RandomImage(20, 10, 3);
+  EXPECT_THROW(GaussianBlur(image, 1.6, &image), CheckError);
+  cv::Mat bytes(10, 20, CV_8U, cv::Scalar(5)), blurred;
+  EXPECT_THROW(GaussianBlur(bytes, 1.6, &blurred), CheckError);
+}
+
+}  // namespace
+}  // namespace parallax
