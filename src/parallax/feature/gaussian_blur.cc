@@ -30,8 +30,7 @@ constexpr int kBlock = 32;
 // first n < kBlock samples, where before[i] and after[i] point i taps away on either side;
 // the same sums in the same order as the full blocks'.
 void SymmetricTapsTail(const float* const* before, const float* const* after, int offset,
-                       const float* centre, const float* kernel, int radius, int n,
-                       float* out) {
+                       const float* centre, const float* kernel, int radius, int n, float* out) {
   for (int j = 0; j < n; ++j) {
     float acc = kernel[0] * centre[j];
     for (int i = 1; i <= radius; ++i) {
@@ -44,8 +43,8 @@ void SymmetricTapsTail(const float* const* before, const float* const* after, in
 void SymmetricTapsBlock(const float* const* before, const float* const* after, int offset,
                         const float* centre, const float* kernel, int radius, float* out) {
   const Float8 k0 = Float8{} + kernel[0];
-  Float8 acc0 = k0 * Load8(centre), acc1 = k0 * Load8(centre + 8),
-         acc2 = k0 * Load8(centre + 16), acc3 = k0 * Load8(centre + 24);
+  Float8 acc0 = k0 * Load8(centre), acc1 = k0 * Load8(centre + 8), acc2 = k0 * Load8(centre + 16),
+         acc3 = k0 * Load8(centre + 24);
   for (int i = 1; i <= radius; ++i) {
     const Float8 k = Float8{} + kernel[i];
     const float* a = before[i] + offset;
@@ -102,8 +101,7 @@ void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst, cv::Mat* diffe
   // The vertical pass's row, padded by `radius` replicated samples on each side.
   std::vector<float> padded(cols + 2 * radius);
   float* column_pass = padded.data() + radius;
-  std::vector<const float*> up(radius + 1), down(radius + 1), left(radius + 1),
-      right(radius + 1);
+  std::vector<const float*> up(radius + 1), down(radius + 1), left(radius + 1), right(radius + 1);
   for (int i = 1; i <= radius; ++i) {
     left[i] = column_pass - i;
     right[i] = column_pass + i;
