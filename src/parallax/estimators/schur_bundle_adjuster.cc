@@ -97,7 +97,7 @@ class SchurSolver {
                    std::vector<Eigen::Vector3d>* point_step);
   double ModelCostChange(const Eigen::VectorXd& camera_step,
                          const std::vector<Eigen::Vector3d>& point_step) const;
-  // J_c dc of the k-th observation (in observation_order_): its pose and intrinsics part of
+  // J_c dc of the k-th observation (in observations_): its pose and intrinsics part of
   // the linearised residual change for the reduced-system step `camera_step`.
   Eigen::Vector2d CameraStepImage(size_t k, const Eigen::VectorXd& camera_step) const;
   void ApplyStep(const Eigen::VectorXd& camera_step, const std::vector<Eigen::Vector3d>& point_step,
@@ -118,14 +118,16 @@ class SchurSolver {
   std::vector<ProjectFn> project_;
   std::vector<ImgFromCamFn> img_from_cam_;
 
-  // Observations grouped by point, and the points split into chunks of about equal work
-  // (one partial reduced system each, summed in chunk order: deterministic per thread count).
-  std::vector<int> observation_order_;
+  // The observations grouped by point (a copy: every pass walks them in this order, and
+  // reaching them through an index into the problem's order missed the cache on most), and
+  // the points split into chunks of about equal work (one partial reduced system each,
+  // summed in chunk order: deterministic per thread count).
+  std::vector<BundleAdjustmentProblem::Observation> observations_;
   std::vector<size_t> point_begin_;
   std::vector<int> chunk_begin_;
 
   Parameters parameters_;
-  std::vector<ObservationJacobian> jacobians_;  // In observation_order_.
+  std::vector<ObservationJacobian> jacobians_;  // In observations_'s order.
   // The k-th observation's intrinsics Jacobian, 2 x its camera's free parameters.
   Eigen::Map<Matrix2X> CameraJacobian(size_t k, int dim) {
     return Eigen::Map<Matrix2X>(camera_jacobian_values_.data() + k * camera_jacobian_stride_, 2,
@@ -187,10 +189,10 @@ void SchurSolver<ReducedMatrix>::Layout() {
   point_begin_.assign(num_points + 1, 0);
   for (const auto& observation : problem_.observations) ++point_begin_[observation.point + 1];
   for (size_t j = 0; j < num_points; ++j) point_begin_[j + 1] += point_begin_[j];
-  observation_order_.resize(problem_.observations.size());
+  observations_.resize(problem_.observations.size());
   std::vector<size_t> next(point_begin_.begin(), point_begin_.end() - 1);
-  for (size_t k = 0; k < problem_.observations.size(); ++k) {
-    observation_order_[next[problem_.observations[k].point]++] = static_cast<int>(k);
+  for (const auto& observation : problem_.observations) {
+    observations_[next[observation.point]++] = observation;
   }
 
   // Chunks by observation count; their number is the thread count, so that a given thread
@@ -229,7 +231,7 @@ void SchurSolver<ReducedMatrix>::Layout() {
     for (size_t j = 0; j < num_points; ++j) {
       offsets.clear();
       for (size_t k = point_begin_[j]; k < point_begin_[j + 1]; ++k) {
-        const auto& observation = problem_.observations[observation_order_[k]];
+        const auto& observation = observations_[k];
         if (pose_offset_[observation.pose] >= 0) offsets.push_back(pose_offset_[observation.pose]);
         if (camera_offset_[observation.camera] >= 0)
           offsets.push_back(camera_offset_[observation.camera]);
@@ -292,7 +294,7 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
       Eigen::Matrix3d v = Eigen::Matrix3d::Zero();
       Eigen::Vector3d g_point = Eigen::Vector3d::Zero();
       for (size_t k = point_begin_[j]; k < point_begin_[j + 1]; ++k) {
-        const auto& observation = problem_.observations[observation_order_[k]];
+        const auto& observation = observations_[k];
         const int p = observation.pose;
         const int c = observation.camera;
         const double* params = parameters.camera_params[c].data();
@@ -424,7 +426,7 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
       y_camera.resize(m);
       for (size_t a = 0; a < m; ++a) {
         const size_t k = begin + a;
-        const auto& observation = problem_.observations[observation_order_[k]];
+        const auto& observation = observations_[k];
         const ObservationJacobian& jacobian = jacobians_[k];
         if (pose_offset_[observation.pose] >= 0) {
           w_pose[a].noalias() = jacobian.pose.transpose() * jacobian.point;
@@ -441,11 +443,10 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
       // One variable camera in every view of the point (a collection from one camera): its
       // block of the sum is W_c V^-1 W_c^T with W_c the sum of the views' camera parts, and
       // pose a's cross block Y_a W_c^T: m products where pairs of views take m^2.
-      int shared_camera = problem_.observations[observation_order_[begin]].camera;
+      int shared_camera = observations_[begin].camera;
       if (camera_offset_[shared_camera] < 0) shared_camera = -1;
       for (size_t a = 1; a < m && shared_camera >= 0; ++a) {
-        if (problem_.observations[observation_order_[begin + a]].camera != shared_camera)
-          shared_camera = -1;
+        if (observations_[begin + a].camera != shared_camera) shared_camera = -1;
       }
       const auto cross = [&](int pose_offset, const Matrix63& y_or_w_pose, int camera_offset,
                              int dim, const MatrixC3& w_or_y_camera) {
@@ -461,12 +462,12 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
       // Block (a, b) of the sum is Y_a W_b^T; only blocks on or below the diagonal are
       // written, each once: pairs b <= a, and for b == a the two segments in one order.
       for (size_t a = 0; a < m; ++a) {
-        const auto& obs_a = problem_.observations[observation_order_[begin + a]];
+        const auto& obs_a = observations_[begin + a];
         const int pose_a = pose_offset_[obs_a.pose];
         const int camera_a = camera_offset_[obs_a.camera];
         const int dim_a = camera_dim_[obs_a.camera];
         for (size_t bi = 0; bi <= a; ++bi) {
-          const auto& obs_b = problem_.observations[observation_order_[begin + bi]];
+          const auto& obs_b = observations_[begin + bi];
           const int pose_b = pose_offset_[obs_b.pose];
           const int camera_b = camera_offset_[obs_b.camera];
           const int dim_b = camera_dim_[obs_b.camera];
@@ -517,8 +518,7 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
         const MatrixC3 y_sum = w_sum * v_inverse_[j];
         s.Block(offset, offset, dim, dim).noalias() -= y_sum * w_sum.transpose();
         for (size_t a = 0; a < m; ++a) {
-          cross(pose_offset_[problem_.observations[observation_order_[begin + a]].pose], y_pose[a],
-                offset, dim, w_sum);
+          cross(pose_offset_[observations_[begin + a].pose], y_pose[a], offset, dim, w_sum);
         }
       }
     }
@@ -557,7 +557,7 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
 template <typename ReducedMatrix>
 Eigen::Vector2d SchurSolver<ReducedMatrix>::CameraStepImage(
     size_t k, const Eigen::VectorXd& camera_step) const {
-  const auto& observation = problem_.observations[observation_order_[k]];
+  const auto& observation = observations_[k];
   Eigen::Vector2d image = Eigen::Vector2d::Zero();
   const int pose_offset = pose_offset_[observation.pose];
   if (pose_offset >= 0) image += jacobians_[k].pose * camera_step.segment<6>(pose_offset);
@@ -582,7 +582,7 @@ double SchurSolver<ReducedMatrix>::ModelCostChange(
     double change = 0;
     for (size_t k = point_begin_[chunk_begin_[chunk]]; k < point_begin_[chunk_begin_[chunk + 1]];
          ++k) {
-      const auto& observation = problem_.observations[observation_order_[k]];
+      const auto& observation = observations_[k];
       const ObservationJacobian& jacobian = jacobians_[k];
       const Eigen::Vector2d j_step =
           jacobian.point * point_step[observation.point] + CameraStepImage(k, camera_step);
