@@ -45,14 +45,16 @@ runs="${BENCH_RUNS:-1}"
 colmaps=()
 declare -A colmap_binary colmap_extraction colmap_matching
 if [[ "${BENCH_NO_COLMAP:-0}" != "1" ]]; then
-  if command -v colmap >/dev/null && colmap help 2>&1 | grep -q "^COLMAP 3"; then
+  # The version from the help text read in full: `grep -q` would stop reading early, and under
+  # pipefail the help's SIGPIPE then sometimes counted as no COLMAP at all.
+  if command -v colmap >/dev/null && [[ "$(colmap help 2>&1)" == "COLMAP 3"* ]]; then
     colmaps+=(colmap38)
     colmap_binary[colmap38]="$(command -v colmap)"
     colmap_extraction[colmap38]=SiftExtraction
     colmap_matching[colmap38]=SiftMatching
   fi
   colmap4="${COLMAP4:-$repo/../shared/tools/colmap4/bin/colmap}"
-  if [[ -x "$colmap4" ]] && "$colmap4" help 2>&1 | grep -q "^COLMAP 4"; then
+  if [[ -x "$colmap4" ]] && [[ "$("$colmap4" help 2>&1)" == "COLMAP 4"* ]]; then
     colmaps+=(colmap42)
     colmap_binary[colmap42]="$colmap4"
     colmap_extraction[colmap42]=FeatureExtraction
