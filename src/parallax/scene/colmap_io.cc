@@ -1,6 +1,7 @@
 #include "parallax/scene/colmap_io.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -194,6 +195,21 @@ class BinaryReader {
   uint64_t remaining_ = 0;
 };
 
+// A double as a stream with max_digits10 precision writes it (printf's %.17g, COLMAP's text
+// models' form), through std::to_chars: the same bytes about ten times faster than the
+// stream's own formatting, which took most of the time of writing a text model.
+struct Digits17 {
+  double value;
+};
+
+std::ostream& operator<<(std::ostream& stream, Digits17 number) {
+  std::array<char, 32> buffer;
+  const auto result =
+      std::to_chars(buffer.data(), buffer.data() + buffer.size(), number.value,
+                    std::chars_format::general, std::numeric_limits<double>::max_digits10);
+  return stream.write(buffer.data(), result.ptr - buffer.data());
+}
+
 // Restores a stream's formatting when the writer returns.
 class PrecisionGuard {
  public:
@@ -302,7 +318,7 @@ void WriteCamerasText(const Reconstruction& reconstruction, std::ostream& stream
          << "# Number of cameras: " << reconstruction.NumCameras() << "\n";
   for (const auto& [camera_id, camera] : reconstruction.Cameras()) {
     stream << camera_id << " " << camera.ModelName() << " " << camera.width << " " << camera.height;
-    for (const double param : camera.params) stream << " " << param;
+    for (const double param : camera.params) stream << " " << Digits17{param};
     stream << "\n";
   }
 }
@@ -319,14 +335,14 @@ void WriteImagesText(const Reconstruction& reconstruction, std::ostream& stream)
     if (!image.registered) continue;
     const Eigen::Quaterniond& q = image.cam_from_world.rotation;
     const Eigen::Vector3d& t = image.cam_from_world.translation;
-    stream << image_id << " " << q.w() << " " << q.x() << " " << q.y() << " " << q.z() << " "
-           << t.x() << " " << t.y() << " " << t.z() << " " << image.camera_id << " " << image.name
-           << "\n";
+    stream << image_id << " " << Digits17{q.w()} << " " << Digits17{q.x()} << " " << Digits17{q.y()}
+           << " " << Digits17{q.z()} << " " << Digits17{t.x()} << " " << Digits17{t.y()} << " "
+           << Digits17{t.z()} << " " << image.camera_id << " " << image.name << "\n";
     bool first = true;
     for (const Point2D& point2D : image.points2D) {
       if (!first) stream << " ";
       first = false;
-      stream << point2D.xy.x() << " " << point2D.xy.y() << " ";
+      stream << Digits17{point2D.xy.x()} << " " << Digits17{point2D.xy.y()} << " ";
       if (point2D.HasPoint3D()) {
         stream << point2D.point3D_id;
       } else {
@@ -344,9 +360,10 @@ void WritePoints3DText(const Reconstruction& reconstruction, std::ostream& strea
          << "# Number of points: " << reconstruction.NumPoints3D()
          << ", mean track length: " << reconstruction.ComputeMeanTrackLength() << "\n";
   for (const auto& [point3D_id, point] : reconstruction.Points3D()) {
-    stream << point3D_id << " " << point.xyz.x() << " " << point.xyz.y() << " " << point.xyz.z()
-           << " " << static_cast<int>(point.color[0]) << " " << static_cast<int>(point.color[1])
-           << " " << static_cast<int>(point.color[2]) << " " << point.error;
+    stream << point3D_id << " " << Digits17{point.xyz.x()} << " " << Digits17{point.xyz.y()} << " "
+           << Digits17{point.xyz.z()} << " " << static_cast<int>(point.color[0]) << " "
+           << static_cast<int>(point.color[1]) << " " << static_cast<int>(point.color[2]) << " "
+           << Digits17{point.error};
     for (const TrackElement& element : point.track.elements) {
       stream << " " << element.image_id << " " << element.point2D_idx;
     }
