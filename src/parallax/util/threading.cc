@@ -1,6 +1,7 @@
 #include "parallax/util/threading.h"
 
 #include <pthread.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <atomic>
@@ -94,6 +95,15 @@ class WorkerPool {
 
 int EffectiveNumThreads(int requested) {
   if (requested > 0) return requested;
+  // The cores this thread may run on: a rank that mpirun or srun bound to some cores (or a
+  // container's cpuset) has fewer than the machine, and as many threads as the machine would
+  // share them.
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof(allowed), &allowed) == 0) {
+    const int count = CPU_COUNT(&allowed);
+    if (count > 0) return count;
+  }
   return std::max(1u, std::thread::hardware_concurrency());
 }
 

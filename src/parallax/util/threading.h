@@ -5,7 +5,9 @@
 
 namespace parallax {
 
-// Number of worker threads to use: `requested` if positive, else the hardware concurrency.
+// Number of worker threads to use: `requested` if positive, else the number of cores the
+// calling thread may run on (its affinity mask: all of the machine's unless a launcher or
+// a cpuset bound the process to fewer).
 int EffectiveNumThreads(int requested);
 
 // Runs body(i) for i in [begin, end) on up to num_threads threads with dynamic scheduling

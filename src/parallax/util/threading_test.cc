@@ -1,6 +1,7 @@
 #include "parallax/util/threading.h"
 
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <atomic>
 #include <stdexcept>
@@ -9,6 +10,25 @@
 
 namespace parallax {
 namespace {
+
+// A process bound to one core (as mpirun binds each of two ranks by default) works on one
+// thread, not on as many as the machine has cores.
+TEST(EffectiveNumThreads, CountsTheCoresTheThreadMayRunOn) {
+  EXPECT_EQ(EffectiveNumThreads(3), 3);
+  cpu_set_t original;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(original), &original), 0);
+  EXPECT_EQ(EffectiveNumThreads(-1), CPU_COUNT(&original));
+  int first = 0;
+  while (!CPU_ISSET(first, &original)) ++first;
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(first, &one);
+  ASSERT_EQ(sched_setaffinity(0, sizeof(one), &one), 0);
+  EXPECT_EQ(EffectiveNumThreads(-1), 1);
+  EXPECT_EQ(EffectiveNumThreads(0), 1);
+  ASSERT_EQ(sched_setaffinity(0, sizeof(original), &original), 0);
+  EXPECT_EQ(EffectiveNumThreads(-1), CPU_COUNT(&original));
+}
 
 TEST(ParallelFor, VisitsEveryIndexOnce) {
   std::vector<std::atomic<int>> visits(1000);
