@@ -23,7 +23,9 @@ out="${2:?usage: sbatch slurm_reconstruct.sh IMAGES OUT [parallax reconstruct op
 shift 2
 parallax="${PARALLAX_BINARY:-parallax}"
 
-# srun starts the ranks through Slurm's PMIx plugin (Debian's OpenMPI is built with PMIx); on a
-# cluster without it, `mpirun -np "$SLURM_NTASKS" --map-by ppr:1:node` does the same.
+# srun starts the ranks through Slurm's PMIx plugin (Debian's OpenMPI is built with PMIx) and
+# gives each its --cpus-per-task cores; on a cluster without it,
+# `mpirun -np "$SLURM_NTASKS" --map-by ppr:1:node --bind-to none` does the same (without
+# --bind-to none, mpirun may bind each rank to one core, where its threads would queue).
 srun --mpi=pmix "$parallax" reconstruct --images "$images" --output "$out" \
   --threads "${SLURM_CPUS_PER_TASK:-1}" --pairs auto --mapper hierarchical "$@"
