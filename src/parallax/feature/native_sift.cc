@@ -217,28 +217,27 @@ struct Extremum {
   float value = 0;  // Interpolated DoG at the refined position.
 };
 
-// Whether the sample is at least as large (positive) or as small (negative) as its 26
-// neighbours in scale and space; its own layer first, where most samples fail.
-bool IsLocalExtremum(const std::vector<cv::Mat>& dogs, int layer, int r, int c) {
+// Whether the sample is at least as large (positive) or as small (negative) as its 18
+// neighbours in the layers above and below. ScreenRow has already compared it with the 8 in
+// its own layer: together, Lowe's 26-neighbour test.
+bool IsExtremumAcrossScales(const std::vector<cv::Mat>& dogs, int layer, int r, int c) {
   const float value = dogs[layer].ptr<float>(r)[c];
-  const auto beaten_in = [&](const cv::Mat& dog, bool skip_centre) {
+  const auto beaten_in = [&](const cv::Mat& dog) {
     for (int rr = r - 1; rr <= r + 1; ++rr) {
       const float* row = dog.ptr<float>(rr);
       for (int cc = c - 1; cc <= c + 1; ++cc) {
-        if (skip_centre && rr == r && cc == c) continue;
         if (value > 0 ? row[cc] > value : row[cc] < value) return true;
       }
     }
     return false;
   };
-  return !beaten_in(dogs[layer], true) && !beaten_in(dogs[layer - 1], false) &&
-         !beaten_in(dogs[layer + 1], false);
+  return !beaten_in(dogs[layer - 1]) && !beaten_in(dogs[layer + 1]);
 }
 
 // candidates[c] = 1 where sample (r, c) passes the contrast screen and is an extremum of the
 // 3 x 3 samples around it in its own layer: the cheap tests, in a loop without branches that
-// the compiler vectorises, so that IsLocalExtremum sees a few samples of each row instead of
-// all. Needs rows r - 1 and r + 1.
+// the compiler vectorises, so that IsExtremumAcrossScales sees a few samples of each row
+// instead of all. Needs rows r - 1 and r + 1.
 void ScreenRow(const cv::Mat& dog, int r, float screen, std::vector<uint8_t>* candidates) {
   const int cols = dog.cols;
   candidates->assign(cols, 0);
@@ -676,7 +675,7 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
               continue;
             }
           }
-          if (!candidates[c] || !IsLocalExtremum(dogs, layer, r, c)) continue;
+          if (!candidates[c] || !IsExtremumAcrossScales(dogs, layer, r, c)) continue;
           Extremum extremum{layer, r, c};
           if (!RefineExtremum(dogs, options, &extremum)) continue;
           Detection& detection = extrema.emplace_back();
