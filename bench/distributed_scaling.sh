@@ -5,7 +5,8 @@
 #   bench/distributed_scaling.sh [VIEWS] [RANKS...]     # default: 1000 views; 1 2 4 ranks
 #
 # Prints one markdown table: each stage's wall time, the total, the coordinator's time alone
-# (storing the features, merging the pair shards, merging and refining the clusters' models)
+# (storing the features, choosing the pairs, merging the pair shards, merging and refining the
+# clusters' models)
 # and its share of the total, and the bytes the ranks read and wrote per image. From the
 # share s and the one-rank total T, Amdahl's law predicts the wall time on M machines of
 # this size as T (s + (1 - s) / M) (an upper bound on the speed-up: it ignores the extra
@@ -57,9 +58,9 @@ ranks, views = int(sys.argv[3]), int(sys.argv[4])
 def stage(name):
     found = re.findall(r'^%s: ([0-9.]+) s' % name, log, re.M)
     return float(found[-1]) if found else float('nan')
-alone = re.search(r'rank 0 alone: storing the features ([0-9.]+) s, merging pairs ([0-9.]+) s, '
-                  r'merging and refining the clusters\' models ([0-9.]+) s', log)
-alone_s = sum(float(x) for x in alone.groups()) if alone else 0.0
+# Storing the features, choosing pairs, merging pairs, merging and refining the clusters' models.
+alone = re.search(r'^rank 0 alone: (.*)$', log, re.M)
+alone_s = sum(float(x) for x in re.findall(r'([0-9.]+) s', alone.group(1))) if alone else 0.0
 io = re.findall(r'read ([0-9.]+) MB, wrote ([0-9.]+) MB', log)
 read = sum(float(r) for r, _ in io) / views if io else float('nan')
 written = sum(float(w) for _, w in io) / views if io else float('nan')

@@ -163,6 +163,9 @@ TEST_F(DistributedTest, ThreeRanksGiveTheDatabaseAndModelOfOneProcess) {
   // The coordinator alone reports.
   EXPECT_NE(result.out.find("model 0: 20/20 images registered"), std::string::npos) << result.out;
   EXPECT_NE(result.err.find("distributed run: 3 ranks"), std::string::npos) << result.err;
+  // What it did alone while the others waited, choosing the pairs among it.
+  EXPECT_NE(result.err.find("rank 0 alone: storing the features"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("choosing pairs"), std::string::npos) << result.err;
 
   ExpectSameDatabase(Reference() / "database.db", out / "database.db");
   // Every rank extracted a share into its own shard, and the shards hold every image once.

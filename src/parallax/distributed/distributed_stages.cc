@@ -226,10 +226,10 @@ std::vector<std::string> DistributedStages::RankReport() const {
   }
   char line[240];
   std::snprintf(line, sizeof(line),
-                "rank 0 alone: storing the features %.1f s, merging pairs %.1f s, merging and "
-                "refining the clusters' models %.1f s",
-                feature_merge_seconds_, pair_sharing_ ? pair_sharing_->MergeSeconds() : 0.0,
-                model_merge_seconds_);
+                "rank 0 alone: storing the features %.1f s, choosing pairs %.1f s, merging pairs "
+                "%.1f s, merging and refining the clusters' models %.1f s",
+                feature_merge_seconds_, pair_sharing_ ? pair_sharing_->ChoosingSeconds() : 0.0,
+                pair_sharing_ ? pair_sharing_->MergeSeconds() : 0.0, model_merge_seconds_);
   lines.emplace_back(line);
   return lines;
 }

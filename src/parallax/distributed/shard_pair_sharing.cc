@@ -28,7 +28,9 @@ Database* ShardPairSharing::Store() {
   return shard_.get();
 }
 
-void ShardPairSharing::Share(std::vector<std::pair<image_t, image_t>>* pairs) const {
+void ShardPairSharing::Share(std::vector<std::pair<image_t, image_t>>* pairs,
+                             double choosing_seconds) const {
+  choosing_seconds_ += choosing_seconds;
   std::vector<image_t> flat;
   for (const auto& [image_id1, image_id2] : *pairs) {
     flat.push_back(image_id1);

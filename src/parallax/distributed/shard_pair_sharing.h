@@ -20,14 +20,17 @@ class ShardPairSharing : public PairSharing {
   ~ShardPairSharing() override;
 
   bool IsCoordinator() const override { return group_.IsCoordinator(); }
-  void Share(std::vector<std::pair<image_t, image_t>>* pairs) const override;
+  void Share(std::vector<std::pair<image_t, image_t>>* pairs,
+             double choosing_seconds) const override;
   std::vector<std::pair<image_t, image_t>> ShareOf(
       const std::vector<std::pair<image_t, image_t>>& pairs) const override;
   Database* Store() override;
   std::vector<PairMatchStats> Merge(Database* database) override;
   // Pairs dealt to this rank so far.
   size_t NumPairsShared() const { return num_pairs_shared_; }
-  // Seconds the coordinator spent merging shards (the other ranks wait meanwhile).
+  // Seconds the coordinator spent choosing pairs and merging shards (the other ranks wait
+  // meanwhile).
+  double ChoosingSeconds() const { return choosing_seconds_; }
   double MergeSeconds() const { return merge_seconds_; }
 
  private:
@@ -35,6 +38,7 @@ class ShardPairSharing : public PairSharing {
   const std::filesystem::path shard_dir_;
   std::unique_ptr<Database> shard_;
   mutable size_t num_pairs_shared_ = 0;
+  mutable double choosing_seconds_ = 0;
   double merge_seconds_ = 0;
 };
 

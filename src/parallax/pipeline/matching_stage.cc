@@ -207,7 +207,7 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
                        << pairs.size() << " to match"
                        << (stats.preemptive ? ", preemptive test on" : "");
   }
-  if (sharing != nullptr) sharing->Share(&pairs);
+  if (sharing != nullptr) sharing->Share(&pairs, coordinator ? stats.selection.seconds : 0.0);
 
   // Trained even when every first-round pair is stored (a resumed run), so that the loop
   // pairs are matched as an uninterrupted run matches them.
@@ -387,6 +387,7 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
                       round < options.pairs.retrieval.num_loop_rounds;
        ++round) {
     std::vector<std::pair<image_t, image_t>> loop_pairs;
+    const Timer choosing_timer;
     if (coordinator && retrieval) {
       std::vector<std::pair<image_pair_t, int>> verified;
       for (const auto& [pair_id, num_inliers] : database->ReadTwoViewGeometryNumInliers()) {
@@ -406,7 +407,8 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
         loop_pairs = OrderPairsForLocality(std::move(loop_pairs), image_ids);
       }
     }
-    if (sharing != nullptr) sharing->Share(&loop_pairs);
+    if (sharing != nullptr)
+      sharing->Share(&loop_pairs, coordinator ? choosing_timer.ElapsedSeconds() : 0.0);
     if (loop_pairs.empty()) break;
     match_pairs(loop_pairs, "matching loops");
   }

@@ -99,8 +99,10 @@ class PairSharing {
   virtual ~PairSharing() = default;
   // Whether this rank chooses the pairs and merges the results.
   virtual bool IsCoordinator() const = 0;
-  // Every rank gets the coordinator's `pairs`.
-  virtual void Share(std::vector<std::pair<image_t, image_t>>* pairs) const = 0;
+  // Every rank gets the coordinator's `pairs`, which it took `choosing_seconds` to choose
+  // (the other ranks waited meanwhile; they pass 0).
+  virtual void Share(std::vector<std::pair<image_t, image_t>>* pairs,
+                     double choosing_seconds) const = 0;
   // This rank's share of `pairs` (the same list on every rank), in their order.
   virtual std::vector<std::pair<image_t, image_t>> ShareOf(
       const std::vector<std::pair<image_t, image_t>>& pairs) const = 0;
