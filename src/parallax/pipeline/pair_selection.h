@@ -100,10 +100,11 @@ std::vector<std::pair<image_t, image_t>> SequentialPairs(const std::vector<image
 std::vector<std::pair<image_t, image_t>> SpatialPairs(
     const std::vector<std::pair<image_t, Eigen::Vector3d>>& positions,
     const SpatialPairOptions& options);
-// Each indexed image with the `num_neighbors` images it retrieves best (itself excluded).
+// Each indexed image with the `num_neighbors` images it retrieves best (itself excluded). The
+// queries run on `num_threads` threads (-1: all cores); the pairs do not depend on it.
 std::vector<std::pair<image_t, image_t>> RetrievalPairs(const RetrievalIndex& index,
                                                         const std::vector<image_t>& image_ids,
-                                                        int num_neighbors);
+                                                        int num_neighbors, int num_threads = 1);
 // Pairs that close loops of the verified view graph `verified` (pair id, inliers): each image
 // with the up to `num_neighbors` images it is not paired with that share the most verified
 // neighbours with it (at least two; ties: more inliers through them, then smaller id).

@@ -71,6 +71,34 @@ TEST(PairSelection, LoopClosingPairsJoinImagesWithCommonNeighbours) {
   EXPECT_TRUE(LoopClosingPairs(verified, {1, 2, 3, 4, 5, 6, 7}, 0).empty());
 }
 
+TEST(PairSelection, RetrievalPairsAreTheNearestWhateverTheThreads) {
+  // Images along a line: image k sees words 10k to 10k + 29, so it shares two thirds of its
+  // words with each neighbour, a third with the next ones. Image 99 is not indexed.
+  constexpr int kNumImages = 40;
+  RetrievalIndex index(10 * kNumImages + 30);
+  std::vector<image_t> image_ids;
+  for (image_t k = 1; k <= kNumImages; ++k) {
+    std::vector<visual_word_t> words;
+    for (visual_word_t word = 10 * k; word < 10 * k + 30; ++word) words.push_back(word);
+    index.AddImage(k, words);
+    image_ids.push_back(k);
+  }
+  index.Finalize();
+  image_ids.push_back(99);
+  const std::vector<ImagePair> one_thread = RetrievalPairs(index, image_ids, 2, 1);
+  EXPECT_EQ(RetrievalPairs(index, image_ids, 2, 3), one_thread);
+  std::set<ImagePair> expected;
+  for (image_t k = 1; k < kNumImages; ++k) expected.insert({k, k + 1});
+  for (const ImagePair& pair : one_thread) {
+    EXPECT_NE(pair.first, 99u);
+    EXPECT_NE(pair.second, 99u);
+  }
+  // Every neighbour pair is retrieved; the ends' second choices are two apart.
+  const std::set<ImagePair> found = AsSet(one_thread);
+  for (const ImagePair& pair : expected) EXPECT_EQ(found.count(pair), 1u) << pair.first;
+  EXPECT_EQ(found.size(), expected.size() + 2);
+}
+
 TEST(PairSelection, LocalityOrderKeepsEveryPairOnce) {
   const std::vector<ImagePair> pairs = {{5, 9}, {1, 2}, {9, 2}, {3, 4}, {1, 9}};
   const std::vector<ImagePair> ordered = OrderPairsForLocality(pairs, {1, 2, 3, 4, 5, 9});
