@@ -191,6 +191,9 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
   if (sharing != nullptr) sharing->Merge(database);
   stats.preemptive = options.preemptive.enabled;
   std::vector<std::pair<image_t, image_t>> pairs;
+  // The coordinator's time alone, as each loop round below measures it: the choice and the
+  // look-up of the pairs already stored.
+  const Timer first_round_timer;
   if (coordinator) {
     PairSelection selection = SelectPairs(options.pairs, image_ids, *database);
     const std::vector<std::pair<image_t, image_t>> all_pairs = std::move(selection.pairs);
@@ -207,7 +210,8 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
                        << pairs.size() << " to match"
                        << (stats.preemptive ? ", preemptive test on" : "");
   }
-  if (sharing != nullptr) sharing->Share(&pairs, coordinator ? stats.selection.seconds : 0.0);
+  if (sharing != nullptr)
+    sharing->Share(&pairs, coordinator ? first_round_timer.ElapsedSeconds() : 0.0);
 
   // Trained even when every first-round pair is stored (a resumed run), so that the loop
   // pairs are matched as an uninterrupted run matches them.

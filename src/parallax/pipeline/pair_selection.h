@@ -104,7 +104,7 @@ std::vector<std::pair<image_t, image_t>> SpatialPairs(
 // queries run on `num_threads` threads (-1: all cores); the pairs do not depend on it.
 std::vector<std::pair<image_t, image_t>> RetrievalPairs(const RetrievalIndex& index,
                                                         const std::vector<image_t>& image_ids,
-                                                        int num_neighbors, int num_threads = 1);
+                                                        int num_neighbors, int num_threads);
 // Pairs that close loops of the verified view graph `verified` (pair id, inliers): each image
 // with the up to `num_neighbors` images it is not paired with that share the most verified
 // neighbours with it (at least two; ties: more inliers through them, then smaller id).
