@@ -41,12 +41,12 @@ void SymmetricTapsTail(const float* const* before, const float* const* after, in
 }
 
 void SymmetricTapsBlock(const float* const* before, const float* const* after, int offset,
-                        const float* centre, const float* kernel, int radius, float* out) {
-  const Float8 k0 = Float8{} + kernel[0];
-  Float8 acc0 = k0 * Load8(centre), acc1 = k0 * Load8(centre + 8), acc2 = k0 * Load8(centre + 16),
-         acc3 = k0 * Load8(centre + 24);
+                        const float* centre, const Float8* taps, int radius, float* out,
+                        const float* subtrahend, float* difference) {
+  Float8 acc0 = taps[0] * Load8(centre), acc1 = taps[0] * Load8(centre + 8),
+         acc2 = taps[0] * Load8(centre + 16), acc3 = taps[0] * Load8(centre + 24);
   for (int i = 1; i <= radius; ++i) {
-    const Float8 k = Float8{} + kernel[i];
+    const Float8 k = taps[i];
     const float* a = before[i] + offset;
     const float* b = after[i] + offset;
     acc0 += k * (Load8(a) + Load8(b));
@@ -58,17 +58,29 @@ void SymmetricTapsBlock(const float* const* before, const float* const* after, i
   Store8(out + 8, acc1);
   Store8(out + 16, acc2);
   Store8(out + 24, acc3);
+  if (difference != nullptr) {
+    Store8(difference, acc0 - Load8(subtrahend));
+    Store8(difference + 8, acc1 - Load8(subtrahend + 8));
+    Store8(difference + 16, acc2 - Load8(subtrahend + 16));
+    Store8(difference + 24, acc3 - Load8(subtrahend + 24));
+  }
 }
 
-// One row of `width` outputs.
+// One row of `width` outputs; with `difference`, also difference = out - subtrahend.
 void FilterRow(const float* const* before, const float* const* after, const float* centre,
-               const std::vector<float>& kernel, int width, float* out) {
+               const std::vector<float>& kernel, const std::vector<Float8>& taps, int width,
+               float* out, const float* subtrahend = nullptr, float* difference = nullptr) {
   const int radius = static_cast<int>(kernel.size()) - 1;
   int x = 0;
   for (; x + kBlock <= width; x += kBlock) {
-    SymmetricTapsBlock(before, after, x, centre + x, kernel.data(), radius, out + x);
+    SymmetricTapsBlock(before, after, x, centre + x, taps.data(), radius, out + x,
+                       subtrahend == nullptr ? nullptr : subtrahend + x,
+                       difference == nullptr ? nullptr : difference + x);
   }
   SymmetricTapsTail(before, after, x, centre + x, kernel.data(), radius, width - x, out + x);
+  if (difference != nullptr) {
+    for (; x < width; ++x) difference[x] = out[x] - subtrahend[x];
+  }
 }
 
 }  // namespace
@@ -94,6 +106,8 @@ void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst, cv::Mat* diffe
   }
   const std::vector<float> kernel = GaussianHalfKernel(sigma);
   const int radius = static_cast<int>(kernel.size()) - 1;
+  std::vector<Float8> taps(kernel.size());
+  for (size_t i = 0; i < kernel.size(); ++i) taps[i] = Float8{} + kernel[i];
   const int rows = src.rows, cols = src.cols;
   dst->create(src.size(), CV_32F);
   if (src.empty()) return;
@@ -111,16 +125,11 @@ void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst, cv::Mat* diffe
       up[i] = src.ptr<float>(std::max(r - i, 0));
       down[i] = src.ptr<float>(std::min(r + i, rows - 1));
     }
-    FilterRow(up.data(), down.data(), src.ptr<float>(r), kernel, cols, column_pass);
+    FilterRow(up.data(), down.data(), src.ptr<float>(r), kernel, taps, cols, column_pass);
     std::fill(padded.begin(), padded.begin() + radius, column_pass[0]);
     std::fill(padded.end() - radius, padded.end(), column_pass[cols - 1]);
-    float* out = dst->ptr<float>(r);
-    FilterRow(left.data(), right.data(), column_pass, kernel, cols, out);
-    if (difference != nullptr) {
-      const float* in = src.ptr<float>(r);
-      float* diff = difference->ptr<float>(r);
-      for (int c = 0; c < cols; ++c) diff[c] = out[c] - in[c];
-    }
+    FilterRow(left.data(), right.data(), column_pass, kernel, taps, cols, dst->ptr<float>(r),
+              src.ptr<float>(r), difference == nullptr ? nullptr : difference->ptr<float>(r));
   }
 }
 
