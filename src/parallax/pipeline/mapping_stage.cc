@@ -152,6 +152,8 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
   }
   DescribeMapperInput(input, &result);
   result.load_seconds = timer.ElapsedSeconds();
+  PARALLAX_LOG(Info) << "mapper: database loaded and tracks built in " << result.load_seconds
+                     << " s";
 
   if (options.mapper_type == MapperType::kHierarchical) {
     HierarchicalMapper mapper(options.hierarchical, options.mapper, input);
@@ -190,6 +192,7 @@ void ColorizeAndWriteModels(const MappingStageOptions& options,
   for (Reconstruction& model : result->models) ColorizePoints(image_dir, &model);
   WriteModels(result->models, output_dir, options.write_text, options.write_binary);
   result->write_seconds = timer.ElapsedSeconds();
+  PARALLAX_LOG(Info) << "mapper: models coloured and written in " << result->write_seconds << " s";
 }
 
 void DescribeMapperInput(const MapperInput& input, MappingStageResult* result) {

@@ -112,6 +112,9 @@ TEST(ReconstructionPipeline, PhotosAddedLaterAreRegisteredIntoTheEarlierModel) {
   EXPECT_GT(phases["triangulation"].get<double>(), 0.0);
   EXPECT_NEAR(phases["local_ba"].get<double>() + phases["global_ba"].get<double>(),
               second.summary["mapper"]["bundle_adjustment_s"].get<double>(), 1e-9);
+  // The stage's time outside the mapper: loading the database, colouring and writing.
+  EXPECT_GT(second.summary["mapper"]["load_s"].get<double>(), 0.0);
+  EXPECT_GT(second.summary["mapper"]["write_s"].get<double>(), 0.0);
 
   // --remap: from scratch, the same photos.
   fs::copy_file(dir / "scene" / view(1), dir / "photos" / view(1));

@@ -52,7 +52,9 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   summary["mapper"] = {{"local_bundle_adjustments", result.summary.num_local_ba},
                        {"global_bundle_adjustments", result.summary.num_global_ba},
                        {"bundle_adjustment_s", result.summary.BaSeconds()},
-                       {"phase_s", phase_times}};
+                       {"phase_s", phase_times},
+                       {"load_s", result.load_seconds},
+                       {"write_s", result.write_seconds}};
   if (result.num_input_model_images > 0 || !result.input_model_images_missing.empty()) {
     // An extended model: the images that kept their poses, and those that are gone.
     summary["mapper"]["input_model"] = {{"images_kept", result.num_input_model_images},
