@@ -325,7 +325,7 @@ MappingStageResult DistributedStages::MapClusters(const MappingStageOptions& opt
     result.hierarchical->cluster_seconds = cluster_seconds;
     result.models =
         mapper.MergeAndRefine(std::move(cluster_models), &result.summary, &*result.hierarchical);
-    ColorizeAndWriteModels(options, image_dir, output_dir, &result);
+    ColorizeAndWriteModels(options, &database, image_dir, output_dir, &result);
     model_merge_seconds_ += merge_timer.ElapsedSeconds();
   }
   group_.Barrier();

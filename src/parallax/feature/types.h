@@ -24,6 +24,10 @@ struct FeatureKeypoint {
 };
 using FeatureKeypoints = std::vector<FeatureKeypoint>;
 
+// The colour of the image under each keypoint, as red, green, blue bytes in keypoint order
+// (3 per keypoint): stored at extraction, so that colouring a model needs no image decoded.
+using KeypointColors = std::vector<uint8_t>;
+
 // One descriptor per row, 128 bytes for SIFT.
 using FeatureDescriptors = Eigen::Matrix<uint8_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -342,6 +343,18 @@ ImageFormat DetectImageFormatFromBytes(std::string_view bytes) {
 std::optional<ImageSize> ReadImageSizeFromBytes(std::string_view bytes) {
   MemoryByteSource source(bytes);
   return ReadSize(DetectFormat(source), source);
+}
+
+bool Bitmap::RgbAt(double x, double y, uint8_t rgb[3]) const {
+  if (color.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
+  // Clamped as doubles, so that no value outside int's range is converted.
+  const int column = static_cast<int>(std::clamp(x, 0.0, color.cols - 1.0));
+  const int row = static_cast<int>(std::clamp(y, 0.0, color.rows - 1.0));
+  const cv::Vec3b bgr = color.at<cv::Vec3b>(row, column);
+  rgb[0] = bgr[2];
+  rgb[1] = bgr[1];
+  rgb[2] = bgr[0];
+  return true;
 }
 
 Bitmap ReadBitmap(const std::filesystem::path& path, const ImageReaderOptions& options) {

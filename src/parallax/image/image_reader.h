@@ -39,6 +39,11 @@ struct Bitmap {
   cv::Mat gray;   // CV_8UC1
   int Width() const { return gray.cols; }
   int Height() const { return gray.rows; }
+  // Red, green and blue of the pixel that contains (x, y), with pixel centres at +0.5 (the
+  // keypoints' convention), or of the nearest border pixel when (x, y) lies outside (SIFT can
+  // refine a keypoint past the border: one in 70,000 on templeRing). False only for an empty
+  // image or a non-finite position.
+  bool RgbAt(double x, double y, uint8_t rgb[3]) const;
 };
 
 // Reads by content. Throws InputError "<path>: <reason>" (not an image, truncated, too large).

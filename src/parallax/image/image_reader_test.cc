@@ -149,6 +149,31 @@ TEST_F(ImageReaderTest, RgbaAndGrayImagesAreConverted) {
   for (const cv::Mat& plane : planes) EXPECT_TRUE(Equal(plane, gray));
 }
 
+TEST(BitmapTest, RgbAtIsThePixelContainingThePointOrTheNearestBorderPixel) {
+  Bitmap bitmap;
+  bitmap.color = cv::Mat(3, 4, CV_8UC3);
+  for (int row = 0; row < 3; ++row) {
+    for (int column = 0; column < 4; ++column) {
+      bitmap.color.at<cv::Vec3b>(row, column) = cv::Vec3b(column, row, 100);  // BGR.
+    }
+  }
+  const auto rgb_at = [&bitmap](double x, double y) {
+    uint8_t rgb[3] = {0, 0, 0};
+    EXPECT_TRUE(bitmap.RgbAt(x, y, rgb)) << x << " " << y;
+    return cv::Vec3i(rgb[0], rgb[1], rgb[2]);
+  };
+  EXPECT_EQ(rgb_at(0.5, 0.5), cv::Vec3i(100, 0, 0));
+  EXPECT_EQ(rgb_at(2.99, 1.0), cv::Vec3i(100, 1, 2));
+  EXPECT_EQ(rgb_at(3.5, 2.5), cv::Vec3i(100, 2, 3));
+  // Outside: the nearest border pixel (SIFT refines a few keypoints past the border).
+  EXPECT_EQ(rgb_at(-0.4, 1.5), cv::Vec3i(100, 1, 0));
+  EXPECT_EQ(rgb_at(1.5, -15.4), cv::Vec3i(100, 0, 1));
+  EXPECT_EQ(rgb_at(1e12, 1e12), cv::Vec3i(100, 2, 3));
+  uint8_t rgb[3];
+  EXPECT_FALSE(bitmap.RgbAt(std::nan(""), 1.0, rgb));
+  EXPECT_FALSE(Bitmap().RgbAt(0.5, 0.5, rgb));
+}
+
 TEST_F(ImageReaderTest, TruncatedImagesAreRefused) {
   const cv::Mat image = TestImage(64, 48);
   for (const std::string extension : {".png", ".jpg"}) {

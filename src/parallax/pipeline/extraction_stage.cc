@@ -46,6 +46,9 @@ struct ExtractionResult {
   size_t height = 0;
   FeatureKeypoints keypoints;
   FeatureDescriptors descriptors;
+  // Nullopt when a keypoint is not finite (the model's colours then come from the image) or
+  // a shard stored none.
+  std::optional<KeypointColors> colors;
   ImageFileFingerprint fingerprint;
   // Read once here, in parallel: the GPS position and, when EXIF tells cameras, the camera.
   std::optional<ExifData> exif;
@@ -57,6 +60,16 @@ std::optional<GeodeticPosition> GpsPosition(const std::optional<ExifData>& exif)
   if (!exif || !exif->gps_latitude || !exif->gps_longitude) return std::nullopt;
   return GeodeticPosition{*exif->gps_latitude, *exif->gps_longitude,
                           exif->gps_altitude.value_or(0.0)};
+}
+
+// The colour under each keypoint (Bitmap::RgbAt), or nullopt when one has none.
+std::optional<KeypointColors> SampleKeypointColors(const Bitmap& bitmap,
+                                                   const FeatureKeypoints& keypoints) {
+  KeypointColors colors(3 * keypoints.size());
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    if (!bitmap.RgbAt(keypoints[i].x, keypoints[i].y, colors.data() + 3 * i)) return std::nullopt;
+  }
+  return colors;
 }
 
 // Size and modification time of the file as it is now (no digest).
@@ -103,6 +116,7 @@ ExtractionResult ExtractImage(const ExtractionJob& job, const ExtractionStageOpt
       result.height = stored->height;
       result.keypoints = std::move(stored->keypoints);
       result.descriptors = std::move(stored->descriptors);
+      result.colors = std::move(stored->colors);
       result.exif = ReadExifHint(job.path);
       return result;
     }
@@ -111,6 +125,7 @@ ExtractionResult ExtractImage(const ExtractionJob& job, const ExtractionStageOpt
     result.width = static_cast<size_t>(bitmap.Width());
     result.height = static_cast<size_t>(bitmap.Height());
     extractor.Extract(bitmap.gray, &result.keypoints, &result.descriptors);
+    result.colors = SampleKeypointColors(bitmap, result.keypoints);
     result.exif = ReadExifHint(job.path);
   } catch (const CheckError&) {
     throw;  // A bug, not a bad file.
@@ -246,6 +261,7 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
       // The row exists; add what is missing (each write is atomic on its own).
       if (!database->ExistsKeypoints(*job.image_id)) {
         database->WriteKeypoints(*job.image_id, result.keypoints);
+        if (result.colors) database->WriteKeypointColors(*job.image_id, *result.colors);
       }
       if (!database->ExistsDescriptors(*job.image_id)) {
         database->WriteDescriptors(*job.image_id, result.descriptors);
@@ -266,7 +282,7 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
         return;
       }
       database->WriteImageWithFeatures(job.name, camera_id, result.keypoints, result.descriptors,
-                                       result.fingerprint, GpsPosition(result.exif));
+                                       result.fingerprint, GpsPosition(result.exif), result.colors);
     }
     if (job.image_id) database->WriteImageFileFingerprint(*job.image_id, result.fingerprint);
     stats.hash_thread_seconds += result.hash_seconds;

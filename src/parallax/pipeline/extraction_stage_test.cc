@@ -92,6 +92,18 @@ TEST_F(FeatureExtractionTest, ExtractsSkipsBadFilesAndResumes) {
     EXPECT_LE(stored[k].x, 320.0f);
   }
   EXPECT_EQ(database.ReadDescriptors(1), descriptors);
+  // With the colour of the image under each keypoint (red, green, blue), for the model's
+  // points: the circles are (level, level, 255 - level) in BGR.
+  const std::optional<KeypointColors> colors = database.ReadKeypointColors(1);
+  ASSERT_TRUE(colors.has_value());
+  ASSERT_EQ(colors->size(), 3 * keypoints.size());
+  for (size_t k = 0; k < stored.size(); ++k) {
+    const cv::Vec3b bgr = bitmap.color.at<cv::Vec3b>(static_cast<int>(keypoints[k].y),
+                                                     static_cast<int>(keypoints[k].x));
+    EXPECT_EQ((*colors)[3 * k], bgr[2]) << k;
+    EXPECT_EQ((*colors)[3 * k + 1], bgr[1]) << k;
+    EXPECT_EQ((*colors)[3 * k + 2], bgr[0]) << k;
+  }
 
   // A second run (a resumed one) only retries what failed; new images are added with the
   // existing camera of their size.

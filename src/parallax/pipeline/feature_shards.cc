@@ -66,6 +66,7 @@ std::optional<ShardImageFeatures> FeatureShardIndex::Find(const std::filesystem:
   features.height = camera.height;
   features.keypoints = shard.ReadKeypoints(image_id);
   features.descriptors = shard.ReadDescriptors(image_id);
+  features.colors = shard.ReadKeypointColors(image_id);
   features.fingerprint = entry->fingerprint;
   return features;
 }

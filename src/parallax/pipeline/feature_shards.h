@@ -18,6 +18,7 @@ struct ShardImageFeatures {
   size_t height = 0;
   FeatureKeypoints keypoints;
   FeatureDescriptors descriptors;
+  std::optional<KeypointColors> colors;
   ImageFileFingerprint fingerprint;
 };
 

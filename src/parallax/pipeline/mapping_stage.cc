@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -27,13 +29,34 @@ void MappingStageOptions::Check() const {
                      "an input model is extended by the incremental mapper");
 }
 
-void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reconstruction) {
-  // Images are decoded in parallel (decoding is most of the time); their samples are summed in
-  // image order, so the colours do not depend on the threads.
+void ColorizePoints(const std::filesystem::path& image_dir, const Database* database,
+                    Reconstruction* reconstruction) {
+  // Each image's colours come from the database when it stored those of the image's keypoints
+  // (one per point2D), else from the image decoded (most of the time when it is, so images
+  // run in parallel); their samples are summed in image order, so the colours do not depend
+  // on the threads.
   const std::vector<image_t> image_ids = reconstruction->RegImageIds();
   std::vector<std::vector<std::pair<point3D_t, Eigen::Vector3d>>> samples(image_ids.size());
+  std::mutex database_mutex;  // A Database is one thread's at a time.
+  std::atomic<size_t> num_decoded = 0;
   ParallelFor(0, image_ids.size(), -1, [&](size_t index) {
     const Image& image = reconstruction->GetImage(image_ids[index]);
+    std::optional<KeypointColors> stored;
+    if (database != nullptr) {
+      const std::lock_guard<std::mutex> lock(database_mutex);
+      if (const std::optional<image_t> id = database->ImageIdByName(image.name)) {
+        stored = database->ReadKeypointColors(*id);
+      }
+    }
+    if (stored && stored->size() == 3 * image.points2D.size()) {
+      for (size_t i = 0; i < image.points2D.size(); ++i) {
+        const Point2D& point2D = image.points2D[i];
+        if (!point2D.HasPoint3D()) continue;
+        const uint8_t* rgb = stored->data() + 3 * i;
+        samples[index].emplace_back(point2D.point3D_id, Eigen::Vector3d(rgb[0], rgb[1], rgb[2]));
+      }
+      return;
+    }
     Bitmap bitmap;
     try {
       bitmap = ReadBitmap(image_dir / image.name);
@@ -41,16 +64,18 @@ void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reco
       PARALLAX_LOG(Warning) << "colours: " << error.what();
       return;
     }
+    ++num_decoded;
     for (const Point2D& point2D : image.points2D) {
-      if (!point2D.HasPoint3D()) continue;
-      // Keypoints use pixel centres at +0.5.
-      const int x = static_cast<int>(point2D.xy.x());
-      const int y = static_cast<int>(point2D.xy.y());
-      if (x < 0 || y < 0 || x >= bitmap.color.cols || y >= bitmap.color.rows) continue;
-      const cv::Vec3b bgr = bitmap.color.at<cv::Vec3b>(y, x);
-      samples[index].emplace_back(point2D.point3D_id, Eigen::Vector3d(bgr[2], bgr[1], bgr[0]));
+      uint8_t rgb[3];
+      if (!point2D.HasPoint3D() || !bitmap.RgbAt(point2D.xy.x(), point2D.xy.y(), rgb)) continue;
+      samples[index].emplace_back(point2D.point3D_id, Eigen::Vector3d(rgb[0], rgb[1], rgb[2]));
     }
   });
+  if (num_decoded > 0) {
+    PARALLAX_LOG(Info) << "colours: " << num_decoded << " of " << image_ids.size()
+                       << " images decoded again (the database holds no keypoint colours for "
+                          "them)";
+  }
   // Sums by point in a flat table (a tree insert per sample took seconds at 1,000 views);
   // each point's rank among the ids is its slot.
   std::vector<point3D_t> point3D_ids;
@@ -180,16 +205,16 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
     IncrementalMapper mapper(options.mapper, input);
     result.models = mapper.Reconstruct(&result.summary);
   }
-  ColorizeAndWriteModels(options, image_dir, output_dir, &result);
+  ColorizeAndWriteModels(options, &database, image_dir, output_dir, &result);
   return result;
 }
 
-void ColorizeAndWriteModels(const MappingStageOptions& options,
+void ColorizeAndWriteModels(const MappingStageOptions& options, const Database* database,
                             const std::filesystem::path& image_dir,
                             const std::filesystem::path& output_dir, MappingStageResult* result) {
   if (result->models.empty()) return;
   const Timer timer;
-  for (Reconstruction& model : result->models) ColorizePoints(image_dir, &model);
+  for (Reconstruction& model : result->models) ColorizePoints(image_dir, database, &model);
   WriteModels(result->models, output_dir, options.write_text, options.write_binary);
   result->write_seconds = timer.ElapsedSeconds();
   PARALLAX_LOG(Info) << "mapper: models coloured and written in " << result->write_seconds << " s";

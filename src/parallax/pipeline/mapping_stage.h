@@ -58,9 +58,9 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
                                    const std::filesystem::path& image_dir,
                                    const std::filesystem::path& output_dir);
 
-// The stage's last step: colours the models' points from `image_dir` and writes them (nothing
-// when there is no model), timed in result->write_seconds.
-void ColorizeAndWriteModels(const MappingStageOptions& options,
+// The stage's last step: colours the models' points (ColorizePoints) and writes them
+// (nothing when there is no model), timed in result->write_seconds.
+void ColorizeAndWriteModels(const MappingStageOptions& options, const Database* database,
                             const std::filesystem::path& image_dir,
                             const std::filesystem::path& output_dir, MappingStageResult* result);
 // Names and keypoint counts of the input's images, and the log line that describes it.
@@ -70,9 +70,12 @@ void DescribeMapperInput(const MapperInput& input, MappingStageResult* result);
 void WriteClusterFiles(const MapperInput& input, const std::vector<std::vector<image_t>>& clusters,
                        const std::filesystem::path& dir);
 
-// Sets every point's colour to the mean colour of its observations in the images.
-// Images that cannot be read are skipped with a warning.
-void ColorizePoints(const std::filesystem::path& image_dir, Reconstruction* reconstruction);
+// Sets every point's colour to the mean colour of its observations: from the keypoint colours
+// `database` (optional) stored at extraction for an image of the same name and as many
+// keypoints as the model's image has points, else from the image in `image_dir`. Images that
+// cannot be read are skipped with a warning.
+void ColorizePoints(const std::filesystem::path& image_dir, const Database* database,
+                    Reconstruction* reconstruction);
 
 // Writes the models to OUT/sparse/<index>/ and the first one's points to OUT/points.ply,
 // replacing the whole sparse/ folder of an earlier run at once (written beside it, then

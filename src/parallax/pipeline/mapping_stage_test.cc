@@ -53,7 +53,7 @@ TEST_F(MappingStageTest, ColoursAreTheMeanOfTheObservations) {
   ASSERT_TRUE(cv::imwrite((dir_ / "view2.png").string(),
                           cv::Mat(48, 64, CV_8UC3, cv::Scalar(255, 61, 50))));
   Reconstruction model = TwoViewModel(60);
-  ColorizePoints(dir_, &model);
+  ColorizePoints(dir_, nullptr, &model);
   for (const auto& [point3D_id, point] : model.Points3D()) {
     // Exact means (61 + 20) / 2 = 40.5 rounds away from zero. A sum that started from an
     // uninitialised vector gave other values, different in every run.
@@ -61,8 +61,40 @@ TEST_F(MappingStageTest, ColoursAreTheMeanOfTheObservations) {
   }
   // A missing image is skipped: the colours come from the other one alone.
   fs::remove(dir_ / "view2.png");
-  ColorizePoints(dir_, &model);
+  ColorizePoints(dir_, nullptr, &model);
   EXPECT_EQ(model.Points3D().begin()->second.color.cast<int>(), Eigen::Vector3i(10, 20, 30));
+}
+
+TEST_F(MappingStageTest, ColoursComeFromTheDatabaseWhereItStoredTheKeypointsColours) {
+  // The images say (red 10, green 20, blue 30) everywhere; the database stored other colours
+  // for view1's keypoints, and for view2 colours of a different number of keypoints (another
+  // extraction than the model's), which are not used.
+  for (const char* name : {"view1.png", "view2.png"}) {
+    ASSERT_TRUE(
+        cv::imwrite((dir_ / name).string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(30, 20, 10))));
+  }
+  const int num_points = 4;
+  Database database(dir_ / "database.db");
+  const camera_t camera_id =
+      database.WriteCamera(Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 100, 64, 48));
+  KeypointColors view1_colors;
+  for (int k = 0; k < num_points; ++k) view1_colors.insert(view1_colors.end(), {200, 100, 0});
+  const FeatureKeypoints keypoints(num_points);
+  const FeatureDescriptors descriptors(num_points, 128);
+  database.WriteImageWithFeatures("view1.png", camera_id, keypoints, descriptors, std::nullopt,
+                                  std::nullopt, view1_colors);
+  database.WriteImageWithFeatures("view2.png", camera_id, keypoints, descriptors, std::nullopt,
+                                  std::nullopt, KeypointColors(3 * (num_points + 1), 0));
+
+  Reconstruction model = TwoViewModel(num_points);
+  ColorizePoints(dir_, &database, &model);
+  for (const auto& [point3D_id, point] : model.Points3D()) {
+    EXPECT_EQ(point.color.cast<int>(), Eigen::Vector3i(105, 60, 15)) << point3D_id;
+  }
+  // Stored colours need no image: without view1.png they are still used.
+  fs::remove(dir_ / "view1.png");
+  ColorizePoints(dir_, &database, &model);
+  EXPECT_EQ(model.Points3D().begin()->second.color.cast<int>(), Eigen::Vector3i(105, 60, 15));
 }
 
 TEST_F(MappingStageTest, WriteModelsReplacesTheOutputsOfAnEarlierRunAsAWhole) {

@@ -94,7 +94,8 @@ const std::vector<TableSpec>& ColmapTables() {
 }
 
 // Parallax's own tables, which COLMAP ignores (it reads only its own): what each image's
-// features were computed from, so that a rerun notices a photo edited or replaced since.
+// features were computed from, so that a rerun notices a photo edited or replaced since; and
+// the colours under its keypoints, so that colouring a model decodes no image again.
 const std::vector<TableSpec>& ParallaxTables() {
   static const std::vector<TableSpec> tables = {
       {"parallax_image_files",
@@ -102,6 +103,11 @@ const std::vector<TableSpec>& ParallaxTables() {
         {"size", "INTEGER NOT NULL"},
         {"mtime_ns", "INTEGER NOT NULL"},
         {"content_hash", "TEXT NOT NULL"}},
+       {"FOREIGN KEY(image_id) REFERENCES images(image_id) ON DELETE CASCADE"}},
+      {"parallax_keypoint_colors",
+       {{"image_id", "INTEGER PRIMARY KEY NOT NULL"},
+        {"rows", "INTEGER NOT NULL"},
+        {"data", "BLOB"}},
        {"FOREIGN KEY(image_id) REFERENCES images(image_id) ON DELETE CASCADE"}},
   };
   return tables;
@@ -662,7 +668,8 @@ image_t Database::WriteImageWithFeatures(const std::string& name, camera_t camer
                                          const FeatureKeypoints& keypoints,
                                          const FeatureDescriptors& descriptors,
                                          const std::optional<ImageFileFingerprint>& fingerprint,
-                                         const std::optional<GeodeticPosition>& gps_prior) {
+                                         const std::optional<GeodeticPosition>& gps_prior,
+                                         const std::optional<KeypointColors>& colors) {
   PARALLAX_CHECK_EQ(keypoints.size(), static_cast<size_t>(descriptors.rows()));
   ScopedTransaction transaction(db_, path_);
   const image_t image_id = WriteImage(name, camera_id);
@@ -670,6 +677,7 @@ image_t Database::WriteImageWithFeatures(const std::string& name, camera_t camer
   WriteDescriptors(image_id, descriptors);
   if (fingerprint) WriteImageFileFingerprint(image_id, *fingerprint);
   if (gps_prior) WriteImageGpsPrior(image_id, *gps_prior);
+  if (colors) WriteKeypointColors(image_id, *colors);
   transaction.Commit();
   return image_id;
 }
@@ -738,6 +746,33 @@ std::optional<ImageFileFingerprint> Database::ReadImageFileFingerprint(image_t i
   return fingerprint;
 }
 
+void Database::WriteKeypointColors(image_t image_id, const KeypointColors& colors) {
+  PARALLAX_CHECK_EQ(colors.size() % 3, 0u);
+  Statement statement(db_, path_,
+                      "INSERT OR REPLACE INTO parallax_keypoint_colors(image_id, rows, data) "
+                      "VALUES(?, ?, ?);");
+  statement.BindInt64(1, image_id);
+  statement.BindInt64(2, static_cast<int64_t>(colors.size() / 3));
+  statement.BindBlob(3, colors.data(), colors.size());
+  statement.Step(("cannot write keypoint colours of image " + std::to_string(image_id)).c_str());
+}
+
+std::optional<KeypointColors> Database::ReadKeypointColors(image_t image_id) const {
+  Statement statement(db_, path_,
+                      "SELECT rows, data FROM parallax_keypoint_colors WHERE image_id=?;");
+  statement.BindInt64(1, image_id);
+  if (!statement.Step()) return std::nullopt;
+  const int64_t rows = statement.Int64(0);
+  const size_t num_bytes = statement.NumBytes(1);
+  if (rows < 0 || num_bytes != 3 * static_cast<size_t>(rows)) {
+    throw InputError(path_.string() + ": malformed keypoint colours of image " +
+                     std::to_string(image_id) + " (" + std::to_string(num_bytes) + " bytes for " +
+                     std::to_string(rows) + " keypoints)");
+  }
+  const auto* data = static_cast<const uint8_t*>(statement.Blob(1));
+  return KeypointColors(data, data + num_bytes);
+}
+
 void Database::DeleteImage(image_t image_id) {
   ScopedTransaction transaction(db_, path_);
   camera_t camera_id = kInvalidCameraId;
@@ -756,7 +791,8 @@ void Database::DeleteImage(image_t image_id) {
     statement.BindInt64(2, static_cast<int64_t>(kMaxNumImages));
     statement.Step("cannot delete the pairs of an image");
   }
-  for (const std::string table : {"keypoints", "descriptors", "parallax_image_files", "images"}) {
+  for (const std::string table :
+       {"keypoints", "descriptors", "parallax_image_files", "parallax_keypoint_colors", "images"}) {
     const std::string sql = "DELETE FROM " + table + " WHERE image_id = ?1;";
     Statement statement(db_, path_, sql.c_str());
     statement.BindInt64(1, image_id);

@@ -65,7 +65,8 @@ class Database {
                                  const FeatureKeypoints& keypoints,
                                  const FeatureDescriptors& descriptors,
                                  const std::optional<ImageFileFingerprint>& fingerprint = {},
-                                 const std::optional<GeodeticPosition>& gps_prior = {});
+                                 const std::optional<GeodeticPosition>& gps_prior = {},
+                                 const std::optional<KeypointColors>& colors = {});
   // The image's GPS position (EXIF), where COLMAP keeps it: prior_tx, prior_ty, prior_tz hold
   // latitude, longitude and altitude, so COLMAP's spatial matcher reads it too.
   void WriteImageGpsPrior(image_t image_id, const GeodeticPosition& position);
@@ -74,9 +75,14 @@ class Database {
   void WriteImageFileFingerprint(image_t image_id, const ImageFileFingerprint& fingerprint);
   // Nullopt for images stored by COLMAP or by a Parallax before fingerprints.
   std::optional<ImageFileFingerprint> ReadImageFileFingerprint(image_t image_id) const;
+  // The colours under the image's keypoints (Parallax's own table, like the fingerprint),
+  // 3 bytes per keypoint. Nullopt for images stored by COLMAP or by a Parallax before them.
+  // A blob that is not 3 bytes per row throws InputError naming the database.
+  void WriteKeypointColors(image_t image_id, const KeypointColors& colors);
+  std::optional<KeypointColors> ReadKeypointColors(image_t image_id) const;
   // Deletes the image and everything computed from it, in one transaction: keypoints,
-  // descriptors, fingerprint, the matches and geometries of every pair it is in, and its
-  // camera when no other image uses that camera.
+  // descriptors, fingerprint, keypoint colours, the matches and geometries of every pair it is in,
+  // and its camera when no other image uses that camera.
   void DeleteImage(image_t image_id);
   bool ExistsKeypoints(image_t image_id) const;
   bool ExistsDescriptors(image_t image_id) const;

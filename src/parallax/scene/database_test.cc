@@ -294,6 +294,53 @@ TEST_F(DatabaseTest, FingerprintsRoundTripAndGoWithTheirImage) {
   EXPECT_NO_THROW(database.DeleteImage(a));  // Already gone: nothing to do.
 }
 
+TEST_F(DatabaseTest, KeypointColorsRoundTripAndGoWithTheirImage) {
+  const KeypointColors colors = {255, 0, 1, 10, 20, 30, 7, 8, 9};
+  image_t a = kInvalidImageId, b = kInvalidImageId;
+  {
+    Database database(path_);
+    const camera_t camera_id = database.WriteCamera(
+        Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
+    a = database.WriteImageWithFeatures("a.png", camera_id, RandomKeypoints(3),
+                                        RandomDescriptors(3), std::nullopt, std::nullopt, colors);
+    b = database.WriteImageWithFeatures("b.png", camera_id, RandomKeypoints(2),
+                                        RandomDescriptors(2));
+  }
+  Database database(path_);
+  EXPECT_EQ(database.ReadKeypointColors(a), colors);
+  EXPECT_FALSE(database.ReadKeypointColors(b).has_value());  // As COLMAP stores an image.
+  database.WriteKeypointColors(b, {1, 2, 3, 4, 5, 6});
+  EXPECT_EQ(database.ReadKeypointColors(b), (KeypointColors{1, 2, 3, 4, 5, 6}));
+  database.DeleteImage(a);
+  EXPECT_FALSE(database.ReadKeypointColors(a).has_value());
+}
+
+TEST_F(DatabaseTest, MalformedKeypointColorsNameTheDatabase) {
+  image_t image_id = kInvalidImageId;
+  {
+    Database database(path_);
+    const camera_t camera_id = database.WriteCamera(
+        Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
+    image_id = database.WriteImageWithFeatures("a.png", camera_id, RandomKeypoints(2),
+                                               RandomDescriptors(2), std::nullopt, std::nullopt,
+                                               KeypointColors{1, 2, 3, 4, 5, 6});
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path_.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_exec(db, "UPDATE parallax_keypoint_colors SET rows = 3;", nullptr, nullptr, nullptr),
+      SQLITE_OK);
+  sqlite3_close(db);
+  Database database(path_);
+  try {
+    database.ReadKeypointColors(image_id);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_THAT(error.what(), ::testing::HasSubstr(path_.string()));
+    EXPECT_THAT(error.what(), ::testing::HasSubstr("malformed keypoint colours"));
+  }
+}
+
 TEST_F(DatabaseTest, ATwoViewGeometryCanBeDeletedAndWrittenAnew) {
   Database database(path_);
   database.WriteTwoViewGeometry(3, 2, RandomGeometry(8));
@@ -502,10 +549,11 @@ TEST_F(DatabaseTest, ColmapCompatibleLayout) {
                                    "name NOT LIKE 'sqlite_%' ORDER BY name;")) {
     tables.push_back(row[0]);
   }
-  // COLMAP's six, and Parallax's own table of image file fingerprints, which COLMAP ignores.
-  EXPECT_EQ(tables,
-            (std::vector<std::string>{"cameras", "descriptors", "images", "keypoints", "matches",
-                                      "parallax_image_files", "two_view_geometries"}));
+  // COLMAP's six, and Parallax's own tables of image file fingerprints and keypoint colours,
+  // which COLMAP ignores.
+  EXPECT_EQ(tables, (std::vector<std::string>{"cameras", "descriptors", "images", "keypoints",
+                                              "matches", "parallax_image_files",
+                                              "parallax_keypoint_colors", "two_view_geometries"}));
   for (const auto& [table, columns] : expected) {
     std::vector<Column> actual;
     for (const auto& row : raw.Query("PRAGMA table_info(" + table + ");")) {
