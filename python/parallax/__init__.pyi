@@ -245,6 +245,7 @@ def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: 
         no_cross_check: bool = ...,
         max_error: float = ...,
         confidence: float = ...,
+        uncalibrated_fallback: bool = ...,
         max_num_trials: int = ...,
         match_batch_size: int = ...,
         ) -> MatchResult: ...
@@ -319,6 +320,7 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         no_cross_check: bool = ...,
         max_error: float = ...,
         confidence: float = ...,
+        uncalibrated_fallback: bool = ...,
         max_num_trials: int = ...,
         match_batch_size: int = ...,
         input_model: Union[str, os.PathLike] = ...,

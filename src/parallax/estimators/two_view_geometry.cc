@@ -289,9 +289,15 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
   const double F_num_inliers_sought =
       E_found ? static_cast<double>(E_num_inliers) / std::max(options.min_E_F_inlier_ratio, 1e-9)
               : static_cast<double>(min_num_inliers);
-  const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>
-      F_ransac(bounded_options(max_error_px, kFundamentalStream, F_num_inliers_sought));
-  const auto F_report = F_ransac.Estimate(matched1, matched2);
+  // With the intrinsics known, a pair E does not explain is not searched for an F (see
+  // uncalibrated_fallback): only H may still explain it, a pure rotation (where E is not
+  // determined) or a plane.
+  RansacReport<Eigen::Matrix3d> F_report;
+  if (!calibrated || E_found || options.uncalibrated_fallback) {
+    const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>
+        F_ransac(bounded_options(max_error_px, kFundamentalStream, F_num_inliers_sought));
+    F_report = F_ransac.Estimate(matched1, matched2);
+  }
   const size_t F_num_inliers = F_report.success ? F_report.num_inliers : 0;
 
   // H only changes the classification when it explains more than max_H_inlier_ratio of the

@@ -42,6 +42,14 @@ struct TwoViewGeometryOptions {
   double watermark_min_inlier_ratio = 0.7;
   // Use the essential matrix when both cameras have a prior focal length.
   bool use_essential_when_calibrated = true;
+  // When E explains fewer than min_num_inliers matches of a calibrated pair, search F as
+  // well, as COLMAP does (a pair F alone explains is then uncalibrated). Off by default, as in
+  // OpenMVG and Theia, which verify calibrated pairs by E alone: a prior focal length is one
+  // the user gave and bundle adjustment holds (Parallax never sets it from EXIF), so a rigid
+  // pair of views has an E, and what only F's two more degrees of freedom explain is not
+  // one. H is still searched (a pure rotation leaves E undetermined). For COLMAP databases,
+  // whose priors may come from EXIF.
+  bool uncalibrated_fallback = false;
   // Compute cam2_from_cam1 and triangulation_angle for calibrated/uncalibrated pairs.
   bool compute_relative_pose = true;
   void Check() const;
