@@ -102,6 +102,10 @@ void ExpectSameDatabase(const fs::path& expected_path, const fs::path& actual_pa
           << image_id << " keypoint " << i;
     }
     EXPECT_TRUE(actual.ReadDescriptors(image_id) == expected.ReadDescriptors(image_id)) << image_id;
+    // The keypoints' colours come through the shards too (the model's colours need them).
+    const std::optional<KeypointColors> colors = actual.ReadKeypointColors(image_id);
+    ASSERT_TRUE(colors.has_value()) << image_id;
+    EXPECT_EQ(colors, expected.ReadKeypointColors(image_id)) << image_id;
   }
   EXPECT_EQ(actual.ReadAllCameras().size(), expected.ReadAllCameras().size());
   const auto expected_geometries = expected.ReadTwoViewGeometries();
