@@ -184,9 +184,10 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
         const double value = std::atof(text.c_str());
         return value >= 0.5 && value < 1.0 ? "" : "must be at least 0.5 and below 1";
       });
-  app.add_flag("--uncalibrated-fallback", options->geometry.uncalibrated_fallback,
-               "With known intrinsics, also try F and H on pairs E does not explain (COLMAP's "
-               "rule; for COLMAP databases whose prior focal lengths come from EXIF)");
+  app.add_flag(
+      "--uncalibrated-fallback", options->geometry.uncalibrated_fallback,
+      "With known intrinsics, also search for an F where E explains too few matches (COLMAP's "
+      "rule; for COLMAP databases whose prior focal lengths come from EXIF)");
   app.add_option("--max-num-trials", options->geometry.ransac.max_num_trials,
                  "Geometric verification RANSAC trials at most, per model (E, F, H)")
       ->capture_default_str()
