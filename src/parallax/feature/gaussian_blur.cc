@@ -30,11 +30,11 @@ constexpr int kBlock = 32;
 // first n < kBlock samples, where before[i] and after[i] point i taps away on either side;
 // the same sums in the same order as the full blocks'.
 void SymmetricTapsTail(const float* const* before, const float* const* after, int offset,
-                       const float* centre, const float* kernel, int radius, int n, float* out) {
+                       const float* centre, const Float8* taps, int radius, int n, float* out) {
   for (int j = 0; j < n; ++j) {
-    float acc = kernel[0] * centre[j];
+    float acc = taps[0][0] * centre[j];
     for (int i = 1; i <= radius; ++i) {
-      acc += kernel[i] * (before[i][offset + j] + after[i][offset + j]);
+      acc += taps[i][0] * (before[i][offset + j] + after[i][offset + j]);
     }
     out[j] = acc;
   }
@@ -66,18 +66,19 @@ void SymmetricTapsBlock(const float* const* before, const float* const* after, i
   }
 }
 
-// One row of `width` outputs; with `difference`, also difference = out - subtrahend.
+// One row of `width` outputs, from the kernel's taps each broadcast to a register; with
+// `difference`, also difference = out - subtrahend.
 void FilterRow(const float* const* before, const float* const* after, const float* centre,
-               const std::vector<float>& kernel, const std::vector<Float8>& taps, int width,
-               float* out, const float* subtrahend = nullptr, float* difference = nullptr) {
-  const int radius = static_cast<int>(kernel.size()) - 1;
+               const std::vector<Float8>& taps, int width, float* out,
+               const float* subtrahend = nullptr, float* difference = nullptr) {
+  const int radius = static_cast<int>(taps.size()) - 1;
   int x = 0;
   for (; x + kBlock <= width; x += kBlock) {
     SymmetricTapsBlock(before, after, x, centre + x, taps.data(), radius, out + x,
                        subtrahend == nullptr ? nullptr : subtrahend + x,
                        difference == nullptr ? nullptr : difference + x);
   }
-  SymmetricTapsTail(before, after, x, centre + x, kernel.data(), radius, width - x, out + x);
+  SymmetricTapsTail(before, after, x, centre + x, taps.data(), radius, width - x, out + x);
   if (difference != nullptr) {
     for (; x < width; ++x) difference[x] = out[x] - subtrahend[x];
   }
@@ -125,10 +126,10 @@ void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst, cv::Mat* diffe
       up[i] = src.ptr<float>(std::max(r - i, 0));
       down[i] = src.ptr<float>(std::min(r + i, rows - 1));
     }
-    FilterRow(up.data(), down.data(), src.ptr<float>(r), kernel, taps, cols, column_pass);
+    FilterRow(up.data(), down.data(), src.ptr<float>(r), taps, cols, column_pass);
     std::fill(padded.begin(), padded.begin() + radius, column_pass[0]);
     std::fill(padded.end() - radius, padded.end(), column_pass[cols - 1]);
-    FilterRow(left.data(), right.data(), column_pass, kernel, taps, cols, dst->ptr<float>(r),
+    FilterRow(left.data(), right.data(), column_pass, taps, cols, dst->ptr<float>(r),
               src.ptr<float>(r), difference == nullptr ? nullptr : difference->ptr<float>(r));
   }
 }
