@@ -7,9 +7,12 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include "parallax/feature/gaussian_blur.h"
 #include "parallax/util/check.h"
+#include "parallax/util/huge_page_buffer.h"
 
 namespace parallax {
 namespace {
@@ -66,6 +69,7 @@ struct NativeSiftScaleSpace {
   cv::Mat magnitude_buffer, angle_buffer;
   cv::Mat dx_rows, dy_rows;    // A band of rows of differences, converted to polar at once.
   std::vector<float> samples;  // One row of a descriptor's samples.
+  HugePageBuffer memory;       // Holds every cv::Mat above but the two bands of rows.
 };
 
 namespace {
@@ -146,28 +150,67 @@ Gradient LayerGradient(const cv::Mat& image, const GradientRegion& region, Scale
   return gradient;
 }
 
+// Points every float image of the scale space (input, doubled input, each octave's
+// Gaussian layers, the differences, the gradient) into one huge-page block, laid out the
+// same way for every image of a size, so that the same pages serve image after image.
+void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOptions& options,
+                   ScaleSpace* space) {
+  const int num_layers = options.num_octave_layers + 3;
+  std::vector<std::pair<cv::Mat*, cv::Size>> layout;
+  layout.emplace_back(&space->input, input_size);
+  if (options.double_first_octave) layout.emplace_back(&space->doubled, base_size);
+  for (size_t o = 0; o < space->octaves.size(); ++o) {
+    const cv::Size size(base_size.width >> o, base_size.height >> o);
+    space->octaves[o].gaussians.resize(num_layers);
+    for (cv::Mat& gaussian : space->octaves[o].gaussians) layout.emplace_back(&gaussian, size);
+  }
+  space->dog_buffers.resize(num_layers - 1);
+  for (cv::Mat& buffer : space->dog_buffers) layout.emplace_back(&buffer, base_size);
+  layout.emplace_back(&space->magnitude_buffer, base_size);
+  layout.emplace_back(&space->angle_buffer, base_size);
+
+  constexpr size_t kAlignment = 64;
+  const auto padded_bytes = [](cv::Size size) {
+    const size_t bytes = sizeof(float) * static_cast<size_t>(size.area());
+    return (bytes + kAlignment - 1) / kAlignment * kAlignment;
+  };
+  size_t total = 0;
+  for (const auto& [mat, size] : layout) total += padded_bytes(size);
+  auto* next = static_cast<unsigned char*>(space->memory.Reserve(total));
+  for (const auto& [mat, size] : layout) {
+    // A header over the block: create() with this size and type keeps it.
+    if (mat->data != next || mat->size() != size || mat->type() != CV_32F) {
+      *mat = cv::Mat(size, CV_32F, next);
+    }
+    next += padded_bytes(size);
+  }
+}
+
 // The base image of the scale space (the input as floats in [0, 1], doubled for octave -1)
 // and the octaves' layout, with buffers sized for the first octave.
 void PrepareScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, ScaleSpace* space) {
+  const cv::Size base_size =
+      options.double_first_octave ? cv::Size(2 * gray.cols, 2 * gray.rows) : gray.size();
+  int num_octaves = 0;
+  for (int rows = base_size.height, cols = base_size.width;
+       std::min(rows, cols) >= kSmallestOctaveSide; rows /= 2, cols /= 2) {
+    ++num_octaves;
+  }
+  const int layers = options.num_octave_layers;
+  space->octaves.resize(num_octaves);
+  LayOutBuffers(gray.size(), base_size, options, space);
+
   gray.convertTo(space->input, CV_32F, 1.0 / 255.0);
   space->base = space->input;
   // A camera image is taken to carry a blur of half a pixel already (Lowe's assumption).
   double input_blur = 0.5;
   space->first_octave = 0;
   if (options.double_first_octave) {
-    cv::resize(space->input, space->doubled, cv::Size(2 * gray.cols, 2 * gray.rows), 0, 0,
-               cv::INTER_LINEAR);
+    cv::resize(space->input, space->doubled, base_size, 0, 0, cv::INTER_LINEAR);
     space->base = space->doubled;
     input_blur = 1.0;
     space->first_octave = -1;
   }
-  int num_octaves = 0;
-  for (int rows = space->base.rows, cols = space->base.cols;
-       std::min(rows, cols) >= kSmallestOctaveSide; rows /= 2, cols /= 2) {
-    ++num_octaves;
-  }
-  const int layers = options.num_octave_layers;
-  space->octaves.resize(num_octaves);
   space->increments.assign(layers + 3, 0.0);
   for (int k = 1; k < layers + 3; ++k) {
     const double previous = options.sigma * std::pow(2.0, (k - 1.0) / layers);
@@ -176,11 +219,6 @@ void PrepareScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, Sc
   }
   space->first_blur =
       std::sqrt(std::max(options.sigma * options.sigma - input_blur * input_blur, 0.01));
-  const cv::Size size = space->base.size();
-  space->dog_buffers.resize(layers + 2);
-  for (cv::Mat& buffer : space->dog_buffers) buffer.create(size, CV_32F);
-  space->magnitude_buffer.create(size, CV_32F);
-  space->angle_buffer.create(size, CV_32F);
 }
 
 // Builds octave o (after o - 1) and returns its differences of Gaussians, in the corners of

@@ -185,6 +185,38 @@ TEST(NativeSift, DescriptorsAreClampedUnitVectors) {
   }
 }
 
+// Buffers kept between calls (one block the scale space is laid out in) give what fresh
+// ones give, whether the next image is larger, smaller or the same size, with or without
+// the doubled octave.
+TEST(NativeSift, ReusedBuffersGiveWhatFreshOnesGive) {
+  NativeSiftBuffers buffers;
+  NativeSiftOptions undoubled;
+  undoubled.double_first_octave = false;
+  const struct {
+    cv::Mat image;
+    NativeSiftOptions options;
+  } calls[] = {{TexturedImage(120, 90, 80), {}},
+               {TexturedImage(200, 150, 250), {}},
+               {TexturedImage(160, 120, 150), undoubled},
+               {TexturedImage(160, 120, 150), {}},
+               {TexturedImage(120, 90, 80), {}}};
+  for (const auto& call : calls) {
+    std::vector<SiftFrame> fresh, reused;
+    std::vector<float> fresh_descriptors, reused_descriptors;
+    ComputeNativeSift(call.image, call.options, &fresh, &fresh_descriptors);
+    ComputeNativeSift(call.image, call.options, &reused, &reused_descriptors, &buffers);
+    ASSERT_FALSE(fresh.empty());
+    ASSERT_EQ(reused.size(), fresh.size());
+    for (size_t i = 0; i < fresh.size(); ++i) {
+      EXPECT_EQ(reused[i].x, fresh[i].x);
+      EXPECT_EQ(reused[i].y, fresh[i].y);
+      EXPECT_EQ(reused[i].scale, fresh[i].scale);
+      EXPECT_EQ(reused[i].orientation, fresh[i].orientation);
+    }
+    EXPECT_EQ(reused_descriptors, fresh_descriptors);
+  }
+}
+
 TEST(NativeSift, OptionsCheck) {
   NativeSiftOptions options;
   EXPECT_NO_THROW(options.Check());
