@@ -23,8 +23,8 @@ void* HugePageBuffer::Reserve(size_t bytes) {
   data_ = nullptr;
   capacity_ = 0;
   // aligned_alloc wants a multiple of the alignment.
-  const size_t rounded = (std::max<size_t>(bytes, 1) + kHugePageSize - 1) / kHugePageSize *
-                         kHugePageSize;
+  const size_t rounded =
+      (std::max<size_t>(bytes, 1) + kHugePageSize - 1) / kHugePageSize * kHugePageSize;
   data_ = std::aligned_alloc(kHugePageSize, rounded);
   if (data_ == nullptr) throw std::bad_alloc();
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
