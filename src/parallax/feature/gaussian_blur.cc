@@ -5,23 +5,11 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 
+#include "parallax/feature/float8.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
 namespace {
-
-// Eight floats as one AVX2 register (GCC's and Clang's vector extension: the compiler's
-// arrays of accumulators went through the stack on every tap, three times slower than
-// OpenCV). Built for a target without AVX2, each is two SSE registers.
-typedef float Float8 __attribute__((vector_size(32)));
-
-inline Float8 Load8(const float* p) {
-  Float8 v;
-  std::memcpy(&v, p, sizeof(v));
-  return v;
-}
-
-inline void Store8(float* p, Float8 v) { std::memcpy(p, &v, sizeof(v)); }
 
 // Outputs per block: four registers of accumulators.
 constexpr int kBlock = 32;

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "parallax/feature/float8.h"
 #include "parallax/feature/gaussian_blur.h"
 #include "parallax/util/check.h"
 #include "parallax/util/huge_page_buffer.h"
@@ -36,11 +37,11 @@ constexpr int kDescriptorOrientations = 8;
 constexpr int kDescriptorSize = kDescriptorGrid * kDescriptorGrid * kDescriptorOrientations;
 constexpr float kDescriptorMagnification = 3.0f;  // Bin side, in units of the frame's scale.
 constexpr float kDescriptorClamp = 0.2f;
-// A descriptor's histogram is padded by one bin on every side (and one orientation past the
-// last), so that each sample's adds need no bounds checks.
+// A descriptor's histogram is padded by one cell on every side, so that each sample's adds
+// need no bounds checks; a cell's eight orientations are one Float8.
 constexpr int kPaddedGrid = kDescriptorGrid + 2;
-constexpr int kPaddedOrientations = kDescriptorOrientations + 2;
 static_assert(kDescriptorSize == 128);
+static_assert(kDescriptorOrientations == 8);
 
 // One octave of the scale space: S + 3 Gaussian layers.
 struct Octave {
@@ -483,20 +484,19 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
 
 // The descriptor bins and weights of `count` samples along a row: sample i is at bin (bin_x
 // + i step_x, bin_y + i step_y), and weighs nothing outside the window. For each sample, the
-// padded histogram's index of its lowest (column, row, orientation) bin and its fractions
-// towards the next ones. A function of its own, with __restrict, so that the compiler
-// vectorises it (inlined into the row loop it did not; and it needs -fno-trapping-math, see
-// CMakeLists.txt). The floors here, in vector registers, took a quarter of the time of the
+// padded histogram's index of its lowest (column, row) cell, its fractions towards the next
+// ones, and its orientation in bins, in [0, 8). A function of its own, with __restrict, so that the
+// compiler vectorises it (inlined into the row loop it did not; and it needs -fno-trapping-math,
+// see CMakeLists.txt). The floors here, in vector registers, took a quarter of the time of the
 // scalar loop that adds the samples.
 void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float step_y,
                        const float* __restrict angle, float orientation,
                        const float* __restrict magnitude, const float* __restrict window_x,
-                       float window_y, float* __restrict sample_bin, float* __restrict sample_fx,
-                       float* __restrict sample_fy, float* __restrict sample_fo,
+                       float window_y, float* __restrict sample_cell, float* __restrict sample_fx,
+                       float* __restrict sample_fy, float* __restrict sample_orientation,
                        float* __restrict sample_weight) {
   constexpr float kBinsPerRadian = kDescriptorOrientations / kTwoPi;
   constexpr float kLastOrientationBin = 7.99999952f;  // The float below 8.
-  static_assert(kDescriptorOrientations == 8);
   for (int i = 0; i < count; ++i) {
     const float x = bin_x + static_cast<float>(i) * step_x;
     const float y = bin_y + static_cast<float>(i) * step_y;
@@ -506,20 +506,17 @@ void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float 
     // either SIFT in one database compare bin for bin (VLFeat's count the other way).
     float relative = orientation - angle[i];
     relative += relative < 0.0f ? kTwoPi : 0.0f;
-    // Rounding can put an angle just under 2 pi at bin 8.0: held just below it, its weight
-    // goes to the padding bin 8, which folds into bin 0 (a wrap would be a second
-    // conditional, which stops the loop vectorising).
-    const float o = std::min(relative * kBinsPerRadian, kLastOrientationBin);
+    // Rounding can put an angle just under 2 pi at bin 8.0: held just below it (its weight
+    // then goes to bin 7, and the rest, none, to bin 0).
+    sample_orientation[i] = std::min(relative * kBinsPerRadian, kLastOrientationBin);
     // floor, not truncation of bin + 1: that sum can round up to the next integer. Outside
     // the window the bins are meaningless (and never used): clamped, so the conversions
     // stay in range.
     const float x0 = std::floor(inside ? x : 0.0f), y0 = std::floor(inside ? y : 0.0f);
-    const float o0 = std::floor(o);
     sample_fx[i] = x - x0;
     sample_fy[i] = y - y0;
-    sample_fo[i] = o - o0;
     // A float (an exact integer), converted where it is used.
-    sample_bin[i] = ((y0 + 1.0f) * kPaddedGrid + (x0 + 1.0f)) * kPaddedOrientations + o0;
+    sample_cell[i] = (y0 + 1.0f) * kPaddedGrid + (x0 + 1.0f);
     sample_weight[i] = (inside ? window_y : 0.0f) * magnitude[i] * window_x[i];
   }
 }
@@ -542,12 +539,15 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
 
   const float cos_t = std::cos(orientation) / bin_side;
   const float sin_t = std::sin(orientation) / bin_side;
-  // Each sample adds to the 2 x 2 x 2 bins around it, in the padded histogram; the padding
-  // is dropped and the orientation wrap folded in afterwards.
-  // Two copies, for even and odd columns: neighbouring samples mostly hit the same bins, and
+  // Each sample adds to the 2 x 2 (column, row) cells around it in the padded histogram,
+  // to each cell's two orientation bins around its own: one vector of eight orientation
+  // weights, scaled per cell. The padding is dropped afterwards.
+  // Two copies, for even and odd columns: neighbouring samples mostly hit the same cells, and
   // alternating copies lets one sample's adds start before the last one's have landed.
-  constexpr int kHistogramSize = kPaddedGrid * kPaddedGrid * kPaddedOrientations;
-  std::array<float, 2 * kHistogramSize> histogram{};
+  constexpr int kHistogramSize = kPaddedGrid * kPaddedGrid * kDescriptorOrientations;
+  alignas(32) std::array<float, 2 * kHistogramSize> histogram{};
+  const Float8 bin_index = {0, 1, 2, 3, 4, 5, 6, 7};
+  const Float8 zero = {}, one = zero + 1.0f, num_bins = zero + kDescriptorOrientations;
   for (int dy = -radius; dy <= radius; ++dy) {
     const int r = yi + dy;
     if (r < 1 || r >= magnitude.rows - 1) continue;
@@ -581,44 +581,47 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
     const int count = c_end - c_begin + 1;
     if (count <= 0) continue;
     samples->resize(5 * static_cast<size_t>(count));
-    float* sample_bin = samples->data();
-    float* sample_fx = sample_bin + count;
+    float* sample_cell = samples->data();
+    float* sample_fx = sample_cell + count;
     float* sample_fy = sample_fx + count;
-    float* sample_fo = sample_fy + count;
-    float* sample_weight = sample_fo + count;
+    float* sample_orientation = sample_fy + count;
+    float* sample_weight = sample_orientation + count;
     const float bin_x_begin =
         cos_t * (static_cast<float>(c_begin) - x) + sin_t * oy + half_grid - 0.5f;
     const float bin_y_begin =
         -sin_t * (static_cast<float>(c_begin) - x) + cos_t * oy + half_grid - 0.5f;
     DescriptorSamples(count, bin_x_begin, bin_y_begin, cos_t, -sin_t, ang_row + c_begin,
                       orientation, mag_row + c_begin, weights_x.data() + (c_begin - xi + radius),
-                      weight_y, sample_bin, sample_fx, sample_fy, sample_fo, sample_weight);
+                      weight_y, sample_cell, sample_fx, sample_fy, sample_orientation,
+                      sample_weight);
     for (int i = 0; i < count; ++i) {
       const float weight = sample_weight[i];
       if (weight == 0.0f) continue;
-      const float fx = sample_fx[i], fy = sample_fy[i], fo = sample_fo[i];
-      float* bin = histogram.data() + (i & 1) * kHistogramSize + static_cast<int>(sample_bin[i]);
+      // Bin b takes 1 - (circular distance from the sample's orientation), when positive:
+      // 1 - fo for the bin below, fo for the one above (bin 0 above bin 7).
+      Float8 distance = bin_index - sample_orientation[i];
+      distance = distance < zero ? -distance : distance;
+      distance = distance < num_bins - distance ? distance : num_bins - distance;
+      Float8 share = one - distance;
+      share = share > zero ? share : zero;
+      const float fx = sample_fx[i], fy = sample_fy[i];
       const float w1 = weight * fy, w0 = weight - w1;
       const float w11 = w1 * fx, w10 = w1 - w11, w01 = w0 * fx, w00 = w0 - w01;
-      const float w001 = w00 * fo, w011 = w01 * fo, w101 = w10 * fo, w111 = w11 * fo;
-      bin[0] += w00 - w001;
-      bin[1] += w001;
-      bin[kPaddedOrientations] += w01 - w011;
-      bin[kPaddedOrientations + 1] += w011;
-      bin[kPaddedGrid * kPaddedOrientations] += w10 - w101;
-      bin[kPaddedGrid * kPaddedOrientations + 1] += w101;
-      bin[(kPaddedGrid + 1) * kPaddedOrientations] += w11 - w111;
-      bin[(kPaddedGrid + 1) * kPaddedOrientations + 1] += w111;
+      float* cell = histogram.data() + (i & 1) * kHistogramSize +
+                    kDescriptorOrientations * static_cast<int>(sample_cell[i]);
+      float* below = cell + kPaddedGrid * kDescriptorOrientations;
+      Store8(cell, Load8(cell) + w00 * share);
+      Store8(cell + kDescriptorOrientations, Load8(cell + kDescriptorOrientations) + w01 * share);
+      Store8(below, Load8(below) + w10 * share);
+      Store8(below + kDescriptorOrientations, Load8(below + kDescriptorOrientations) + w11 * share);
     }
   }
   for (int by = 0; by < kDescriptorGrid; ++by) {
     for (int bx = 0; bx < kDescriptorGrid; ++bx) {
       const float* cell =
-          histogram.data() + ((by + 1) * kPaddedGrid + (bx + 1)) * kPaddedOrientations;
+          histogram.data() + ((by + 1) * kPaddedGrid + (bx + 1)) * kDescriptorOrientations;
       float* out = descriptor + (by * kDescriptorGrid + bx) * kDescriptorOrientations;
-      const float* odd_cell = cell + kHistogramSize;
-      for (int o = 0; o < kDescriptorOrientations; ++o) out[o] = cell[o] + odd_cell[o];
-      out[0] += cell[kDescriptorOrientations] + odd_cell[kDescriptorOrientations];
+      Store8(out, Load8(cell) + Load8(cell + kHistogramSize));
     }
   }
 
