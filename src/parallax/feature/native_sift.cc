@@ -417,11 +417,28 @@ void GaussianWeights(int radius, float fraction, float sigma, std::vector<float>
   }
 }
 
+// The orientation-histogram entries of `count` samples along a row: for each, the padded
+// histogram's index of the bin below its angle (bin k of 36 centred on (k + 0.5) 10 degrees
+// is at k + 1; index 0 is bin 35 and index 37 bin 0, folded in afterwards), its share of the
+// bin above, and its weight. Vectorised as DescriptorSamples is.
+void OrientationSamples(int count, const float* __restrict angle, const float* __restrict magnitude,
+                        const float* __restrict window_x, float window_y,
+                        float* __restrict sample_bin, float* __restrict sample_share,
+                        float* __restrict sample_weight) {
+  for (int i = 0; i < count; ++i) {
+    const float bin = kOrientationBins * angle[i] / kTwoPi - 0.5f;
+    const float lower = std::floor(bin);
+    sample_share[i] = bin - lower;
+    sample_bin[i] = lower + 1.0f;  // An exact integer in [0, 36].
+    sample_weight[i] = magnitude[i] * window_x[i] * window_y;
+  }
+}
+
 // Dominant gradient orientations around a frame: a 36-bin histogram of gradient directions
 // weighted by magnitude and a Gaussian window, smoothed, whose peaks within 80 % of the
 // highest become orientations (interpolated by a parabola), strongest first.
 std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y, float octave_scale,
-                                     int max_orientations) {
+                                     int max_orientations, std::vector<float>* samples) {
   const cv::Mat& magnitude = gradient.magnitude;
   const cv::Mat& angle = gradient.angle;
   const float window_sigma = kOrientationWindow * octave_scale;
@@ -431,25 +448,41 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
   GaussianWeights(radius, x - xi, window_sigma, &weights_x);
   GaussianWeights(radius, y - yi, window_sigma, &weights_y);
 
-  std::array<float, kOrientationBins> histogram{};
-  const float radius_sq = radius * radius + 0.5f;
+  // Padded by a bin on each side; two copies, for even and odd columns, so that one
+  // sample's adds need not wait for the last one's.
+  constexpr int kPaddedBins = kOrientationBins + 2;
+  std::array<float, 2 * kPaddedBins> padded{};
+  samples->resize(3 * static_cast<size_t>(2 * radius + 1));
+  float* sample_bin = samples->data();
+  float* sample_share = sample_bin + (2 * radius + 1);
+  float* sample_weight = sample_share + (2 * radius + 1);
   for (int dy = -radius; dy <= radius; ++dy) {
     const int r = yi + dy;
     if (r < 1 || r >= magnitude.rows - 1) continue;
-    const float* mag_row = magnitude.ptr<float>(r);
-    const float* ang_row = angle.ptr<float>(r);
-    for (int dx = -radius; dx <= radius; ++dx) {
-      const int c = xi + dx;
-      if (c < 1 || c >= magnitude.cols - 1 || dx * dx + dy * dy > radius_sq) continue;
-      const float weight = mag_row[c] * weights_x[dx + radius] * weights_y[dy + radius];
-      const float bin = kOrientationBins * ang_row[c] / kTwoPi - 0.5f;
-      const float lower = std::floor(bin);
-      const float upper_share = bin - lower;
-      const int b = (static_cast<int>(lower) + kOrientationBins) % kOrientationBins;
-      histogram[b] += (1.0f - upper_share) * weight;
-      histogram[(b + 1) % kOrientationBins] += upper_share * weight;
+    // The disc's columns on this row: dx^2 + dy^2 <= radius^2.
+    const int reach_sq = radius * radius - dy * dy;
+    int reach = static_cast<int>(std::sqrt(static_cast<double>(reach_sq)));
+    while ((reach + 1) * (reach + 1) <= reach_sq) ++reach;
+    while (reach * reach > reach_sq) --reach;
+    const int c_begin = std::max(1, xi - reach);
+    const int c_end = std::min(magnitude.cols - 2, xi + reach);
+    const int count = c_end - c_begin + 1;
+    if (count <= 0) continue;
+    OrientationSamples(count, angle.ptr<float>(r) + c_begin, magnitude.ptr<float>(r) + c_begin,
+                       weights_x.data() + (c_begin - xi + radius), weights_y[dy + radius],
+                       sample_bin, sample_share, sample_weight);
+    for (int i = 0; i < count; ++i) {
+      float* bin = padded.data() + (i & 1) * kPaddedBins + static_cast<int>(sample_bin[i]);
+      const float upper = sample_share[i] * sample_weight[i];
+      bin[0] += sample_weight[i] - upper;
+      bin[1] += upper;
     }
   }
+  std::array<float, kOrientationBins> histogram;
+  for (int b = 0; b < kOrientationBins; ++b)
+    histogram[b] = padded[b + 1] + padded[kPaddedBins + b + 1];
+  histogram[kOrientationBins - 1] += padded[0] + padded[kPaddedBins];
+  histogram[0] += padded[kPaddedBins - 1] + padded[2 * kPaddedBins - 1];
   for (int pass = 0; pass < kOrientationSmoothing; ++pass) {
     const float first = histogram[0];
     float previous = histogram[kOrientationBins - 1];
@@ -775,7 +808,7 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
       const Detection& extremum = extrema[i];
       for (const float orientation :
            FrameOrientations(gradient, extremum.x, extremum.y, extremum.octave_scale,
-                             options.max_num_orientations)) {
+                             options.max_num_orientations, &space.samples)) {
         Detection& detection = detections.emplace_back(extremum);
         detection.frame.orientation = orientation;
         unranked_descriptors.resize(unranked_descriptors.size() + kDescriptorSize);
