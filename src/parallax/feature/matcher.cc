@@ -224,6 +224,13 @@ void SelectRows(const MatchableDescriptors& descriptors, const std::vector<int>&
     selected->scales[k] = descriptors.scales[rows[k]];
     selected->sums[k] = descriptors.sums[rows[k]];
   }
+  selected->packed = {};
+}
+
+void PackRows(MatchableDescriptors* descriptors) {
+  PackSimilarityColumns(descriptors->bytes.data(), descriptors->scales.data(),
+                        descriptors->NumRows(), static_cast<int>(descriptors->bytes.cols()),
+                        BestSimilarityKernel(), &descriptors->packed);
 }
 
 UnitDescriptorRows ToUnitRows(const FeatureDescriptors& descriptors) {
@@ -274,17 +281,24 @@ FeatureMatches MatchDescriptors(const MatchableDescriptors& descriptors1,
   ParallelFor(0, num_row_blocks, num_threads, [&](size_t block) {
     const int r0 = static_cast<int>(block) * row_block;
     const int num_rows1 = std::min(row_block, num1 - r0);
-    // The block's descriptors in the kernel's layout, packed once for all of image 2.
+    // The block's descriptors in the kernel's layout: packed once for all of image 2, or
+    // once for every pair when the caller packed image 1 (PackRows).
     PackedSimilarityColumns block1;
-    PackSimilarityColumns(bytes1.row(r0).data(), descriptors1.scales.data() + r0, num_rows1, dim,
-                          kernel, &block1);
-    const int stride = block1.num_columns;
+    SimilarityColumns columns1;
+    if (descriptors1.packed.num_columns > 0 && descriptors1.packed.kernel == kernel) {
+      columns1 = descriptors1.packed.Panels(r0, num_rows1);
+    } else {
+      PackSimilarityColumns(bytes1.row(r0).data(), descriptors1.scales.data() + r0, num_rows1, dim,
+                            kernel, &block1);
+      columns1 = block1.All();
+    }
+    const int stride = columns1.num_columns;
     std::vector<float> tile(static_cast<size_t>(kColBlock) * stride);
     for (int c0 = 0; c0 < num2; c0 += kColBlock) {
       const int num_rows2 = std::min(kColBlock, num2 - c0);
       const SimilarityRows rows2{bytes2.row(c0).data(), descriptors2.scales.data() + c0,
                                  descriptors2.sums.data() + c0, num_rows2};
-      ComputeSimilarities(block1, rows2, tile.data());
+      ComputeSimilarities(columns1, rows2, tile.data());
       const size_t col_offset = block * static_cast<size_t>(num2) + c0;
       ScanTile(tile.data(), num_rows2, num_rows1, stride, c0, rows.best.data() + r0,
                rows.second.data() + r0, rows.best_index.data() + r0,

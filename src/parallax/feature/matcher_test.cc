@@ -306,6 +306,33 @@ TEST(MatchDescriptors, SameResultForAnyThreadCount) {
   }
 }
 
+// Image 1's rows packed once (PackRows, as the matching stage does) give the matches that
+// packing each row block gives, with and without the cross-check, on any thread count (row
+// blocks of 32 to 256 rows, the last partial).
+TEST(MatchDescriptors, PackedRowsGiveTheSameMatches) {
+  const RowMatrixXf values1 = RandomUnitDescriptors(1100);
+  RowMatrixXf values2 = RandomUnitDescriptors(700);
+  PlantMatches(values1, 500, 0.05, &values2);
+  const MatchableDescriptors unpacked = PrepareDescriptors(Quantised(values1));
+  MatchableDescriptors packed = unpacked;
+  PackRows(&packed);
+  ASSERT_GE(packed.packed.num_columns, packed.NumRows());
+  const MatchableDescriptors descriptors2 = PrepareDescriptors(Quantised(values2));
+  for (const bool cross_check : {false, true}) {
+    for (const int num_threads : {1, 2, 7}) {
+      const FeatureMatchingOptions options = Options(0.8, 0.7, cross_check, num_threads);
+      const FeatureMatches expected = MatchDescriptors(unpacked, descriptors2, options);
+      EXPECT_GT(expected.size(), 250u);
+      EXPECT_EQ(MatchDescriptors(packed, descriptors2, options), expected)
+          << "cross_check " << cross_check << " threads " << num_threads;
+    }
+  }
+  // A selection of rows is a new block: it drops the packing rather than mis-slice it.
+  MatchableDescriptors selected;
+  SelectRows(packed, {5, 3, 900}, &selected);
+  EXPECT_EQ(selected.packed.num_columns, 0);
+}
+
 // Rows (3, 4, 0, ...), all 255, and all 0.
 FeatureDescriptors ThreeRows() {
   FeatureDescriptors descriptors(3, 128);

@@ -43,7 +43,7 @@ inline float Similarity(int32_t dot, float scale_a, float scale_b) {
   return static_cast<float>(dot) * scale_a * scale_b;
 }
 
-void SimilaritiesScalar(const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
+void SimilaritiesScalar(const SimilarityColumns& a, const uint8_t* b, const float* b_scales,
                         int num_b, float* similarities) {
   const int dim = a.dim;
   for (int j = 0; j < num_b; ++j) {
@@ -97,7 +97,7 @@ __attribute__((target("avx2,fma"))) inline void TileAvx2(const int16_t* panel, i
   }
 }
 
-__attribute__((target("avx2,fma"))) void SimilaritiesAvx2(const PackedSimilarityColumns& a,
+__attribute__((target("avx2,fma"))) void SimilaritiesAvx2(const SimilarityColumns& a,
                                                           const uint8_t* b, const float* b_scales,
                                                           int num_b, float* similarities) {
   const int dim = a.dim;
@@ -106,17 +106,17 @@ __attribute__((target("avx2,fma"))) void SimilaritiesAvx2(const PackedSimilarity
   b_words.resize(static_cast<size_t>(num_b) * dim);
   for (size_t n = 0; n < b_words.size(); ++n) b_words[n] = b[n];
   for (int i0 = 0; i0 < a.num_columns; i0 += 16) {
-    const int16_t* panel = a.pairs.data() + PackedIndex(i0 - i0 % kPanel, 0, 2, dim);
+    const int16_t* panel = a.pairs + PackedIndex(i0 - i0 % kPanel, 0, 2, dim);
     const int half = (i0 % kPanel) / 16;
     int j = 0;
     for (; j + kRowsPerTile <= num_b; j += kRowsPerTile) {
       TileAvx2<kRowsPerTile>(panel, half, b_words.data() + static_cast<ptrdiff_t>(j) * dim,
-                             b_scales + j, dim, a.scales.data() + i0, a.num_columns,
+                             b_scales + j, dim, a.scales + i0, a.num_columns,
                              similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
     for (; j < num_b; ++j) {
       TileAvx2<1>(panel, half, b_words.data() + static_cast<ptrdiff_t>(j) * dim, b_scales + j, dim,
-                  a.scales.data() + i0, a.num_columns,
+                  a.scales + i0, a.num_columns,
                   similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
   }
@@ -160,20 +160,20 @@ __attribute__((target("avx512f,avx512vnni"))) inline void TileAvx512Vnni(
 }
 
 __attribute__((target("avx512f,avx512vnni"))) void SimilaritiesAvx512Vnni(
-    const PackedSimilarityColumns& a, const uint8_t* b, const float* b_scales,
-    const int32_t* b_sums, int num_b, float* similarities) {
+    const SimilarityColumns& a, const uint8_t* b, const float* b_scales, const int32_t* b_sums,
+    int num_b, float* similarities) {
   const int dim = a.dim;
   for (int i0 = 0; i0 < a.num_columns; i0 += kPanel) {
-    const int8_t* panel = a.quads.data() + PackedIndex(i0, 0, 4, dim);
+    const int8_t* panel = a.quads + PackedIndex(i0, 0, 4, dim);
     int j = 0;
     for (; j + kRowsPerTile <= num_b; j += kRowsPerTile) {
       TileAvx512Vnni<kRowsPerTile>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums + j,
-                                   b_scales + j, dim, a.scales.data() + i0, a.num_columns,
+                                   b_scales + j, dim, a.scales + i0, a.num_columns,
                                    similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
     for (; j < num_b; ++j) {
       TileAvx512Vnni<1>(panel, b + static_cast<ptrdiff_t>(j) * dim, b_sums + j, b_scales + j, dim,
-                        a.scales.data() + i0, a.num_columns,
+                        a.scales + i0, a.num_columns,
                         similarities + static_cast<ptrdiff_t>(j) * a.num_columns + i0);
     }
   }
@@ -181,6 +181,23 @@ __attribute__((target("avx512f,avx512vnni"))) void SimilaritiesAvx512Vnni(
 #endif
 
 }  // namespace
+
+SimilarityColumns PackedSimilarityColumns::Panels(int first, int count) const {
+  PARALLAX_CHECK_EQ(first % kPanel, 0);
+  PARALLAX_CHECK_GE(count, 0);
+  const int rounded = (count + kPanel - 1) / kPanel * kPanel;
+  PARALLAX_CHECK_LE(first + rounded, num_columns);
+  // A panel of kPanel columns holds kPanel * dim values, whatever the grouping.
+  const ptrdiff_t offset = static_cast<ptrdiff_t>(first) * dim;
+  SimilarityColumns view;
+  view.kernel = kernel;
+  view.num_columns = rounded;
+  view.dim = dim;
+  view.pairs = pairs.empty() ? nullptr : pairs.data() + offset;
+  view.quads = quads.empty() ? nullptr : quads.data() + offset;
+  view.scales = scales.data() + first;
+  return view;
+}
 
 void PackSimilarityColumns(const uint8_t* a, const float* a_scales, int num_a, int dim,
                            SimilarityKernel kernel, PackedSimilarityColumns* packed) {
@@ -227,7 +244,7 @@ SimilarityKernel BestSimilarityKernel() {
   return best;
 }
 
-void ComputeSimilarities(const PackedSimilarityColumns& a, const SimilarityRows& rows,
+void ComputeSimilarities(const SimilarityColumns& a, const SimilarityRows& rows,
                          float* similarities) {
   const uint8_t* b = rows.bytes;
   const float* b_scales = rows.scales;

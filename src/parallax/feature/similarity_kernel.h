@@ -27,6 +27,18 @@ bool SimilarityKernelAvailable(SimilarityKernel kernel);
 // kAvx512Vnni) so that a micro-tile streams one contiguous panel. Columns past the block's
 // descriptors are zero with scale 0.
 constexpr int kSimilarityPanelWidth = 32;
+
+// Whole panels of packed columns, as the kernels read them (a view: the packed block owns
+// the values).
+struct SimilarityColumns {
+  SimilarityKernel kernel = SimilarityKernel::kScalar;
+  int num_columns = 0;  // A multiple of kSimilarityPanelWidth.
+  int dim = 0;
+  const int16_t* pairs = nullptr;  // kScalar, kAvx2.
+  const int8_t* quads = nullptr;   // kAvx512Vnni.
+  const float* scales = nullptr;
+};
+
 struct PackedSimilarityColumns {
   SimilarityKernel kernel = SimilarityKernel::kScalar;
   int num_columns = 0;         // Padded: a multiple of kSimilarityPanelWidth.
@@ -34,6 +46,11 @@ struct PackedSimilarityColumns {
   std::vector<int16_t> pairs;  // kScalar, kAvx2: [panel][dim / 2][column][2].
   std::vector<int8_t> quads;   // kAvx512Vnni: [panel][dim / 4][column][4], value - 128.
   std::vector<float> scales;   // Per column.
+
+  // Columns [first, first + count), count rounded up to whole panels; `first` must start a
+  // panel. Panels are independent, so a block packed once serves every slice of it.
+  SimilarityColumns Panels(int first, int count) const;
+  SimilarityColumns All() const { return Panels(0, num_columns); }
 };
 
 // Packs num_a descriptors of `dim` bytes (rows of a) with their scales (1 / norm).
@@ -51,7 +68,10 @@ struct SimilarityRows {
 
 // similarities[j * a.num_columns + i] = float(b[j] . a[i]) * a.scales[i] * b.scales[j] for
 // j < b.num_rows and every column i of a (0 for the padding). Runs a's kernel.
-void ComputeSimilarities(const PackedSimilarityColumns& a, const SimilarityRows& b,
-                         float* similarities);
+void ComputeSimilarities(const SimilarityColumns& a, const SimilarityRows& b, float* similarities);
+inline void ComputeSimilarities(const PackedSimilarityColumns& a, const SimilarityRows& b,
+                                float* similarities) {
+  ComputeSimilarities(a.All(), b, similarities);
+}
 
 }  // namespace parallax

@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
 #include "parallax/math/random.h"
+#include "parallax/util/check.h"
 
 namespace parallax {
 namespace {
@@ -107,6 +109,51 @@ TEST(SimilarityKernel, EveryKernelGivesTheReferenceBits) {
 #if defined(__x86_64__) && defined(__AVX2__)
   EXPECT_GE(compared, 4);
 #endif
+}
+
+// A slice of whole panels of a block packed once gives what packing the slice's
+// descriptors alone gives, in every kernel this CPU runs (the matcher slices an image's
+// rows packed once into row blocks).
+TEST(SimilarityKernel, PanelsOfAPackedBlockAreTheSlicePackedAlone) {
+  const Blocks blocks = RandomBlocks(150, 9);  // Five panels, the last partly padding.
+  for (const SimilarityKernel kernel :
+       {SimilarityKernel::kScalar, SimilarityKernel::kAvx2, SimilarityKernel::kAvx512Vnni}) {
+    if (!SimilarityKernelAvailable(kernel)) continue;
+    PackedSimilarityColumns whole;
+    PackSimilarityColumns(blocks.a.data(), blocks.a_scales.data(), blocks.num_a, kDim, kernel,
+                          &whole);
+    const SimilarityRows rows{blocks.b.data(), blocks.b_scales.data(), blocks.b_sums.data(),
+                              blocks.num_b};
+    for (const auto& [first, count] :
+         {std::pair{0, 150}, std::pair{32, 64}, std::pair{64, 86}, std::pair{128, 1}}) {
+      const SimilarityColumns slice = whole.Panels(first, count);
+      ASSERT_EQ(slice.num_columns % kSimilarityPanelWidth, 0);
+      ASSERT_GE(slice.num_columns, count);
+      PackedSimilarityColumns alone;
+      PackSimilarityColumns(blocks.a.data() + first * kDim, blocks.a_scales.data() + first,
+                            std::min(count, blocks.num_a - first), kDim, kernel, &alone);
+      ASSERT_EQ(alone.num_columns, slice.num_columns);
+      std::vector<float> from_slice(static_cast<size_t>(blocks.num_b) * slice.num_columns, -1.0f);
+      std::vector<float> from_alone(from_slice.size(), -2.0f);
+      ComputeSimilarities(slice, rows, from_slice.data());
+      ComputeSimilarities(alone, rows, from_alone.data());
+      // The slice's own columns; past them, a slice that ends inside the block holds the
+      // next descriptors of its last panel where the block packed alone has padding.
+      for (int j = 0; j < blocks.num_b; ++j) {
+        for (int i = 0; i < count; ++i) {
+          const size_t k = static_cast<size_t>(j) * slice.num_columns + i;
+          ASSERT_EQ(from_slice[k], from_alone[k])
+              << "kernel " << static_cast<int>(kernel) << ", columns " << first << " + " << count
+              << ", row " << j << ", column " << i;
+        }
+      }
+    }
+  }
+  PackedSimilarityColumns whole;
+  PackSimilarityColumns(blocks.a.data(), blocks.a_scales.data(), blocks.num_a, kDim,
+                        SimilarityKernel::kScalar, &whole);
+  EXPECT_THROW(whole.Panels(16, 32), CheckError);   // Not at a panel's start.
+  EXPECT_THROW(whole.Panels(128, 64), CheckError);  // Past the last panel.
 }
 
 TEST(SimilarityKernel, BestKernelRunsHere) {

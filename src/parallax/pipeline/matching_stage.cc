@@ -287,6 +287,8 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
       ParallelFor(0, missing.size(), options.num_threads, [&](size_t m) {
         ImageFeatures& features = cache.at(missing[m]);
         features.descriptors = PrepareDescriptors(raw_descriptors[m]);
+        // Exact matching reads an image's rows as image 1 of each of its pairs: packed once.
+        if (!cells) PackRows(&features.descriptors);
         if (stats.preemptive) {
           features.largest =
               LargestFeatures(keypoints[m], features.descriptors, options.preemptive.num_features);
