@@ -154,21 +154,21 @@ Gradient LayerGradient(const cv::Mat& image, const GradientRegion& region, Scale
 // Points every float image of the scale space (input, doubled input, each octave's
 // Gaussian layers, the differences, the gradient) into one huge-page block, laid out the
 // same way for every image of a size, so that the same pages serve image after image.
+// Images used in different phases share memory, which the first image of each thread pays
+// to fault in: the input and its doubled copy are read only by octave 0's first blur,
+// before any difference is written, and the gradient only once every octave's extrema are
+// found, when the differences are done with.
 void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOptions& options,
                    ScaleSpace* space) {
   const int num_layers = options.num_octave_layers + 3;
   std::vector<std::pair<cv::Mat*, cv::Size>> layout;
-  layout.emplace_back(&space->input, input_size);
-  if (options.double_first_octave) layout.emplace_back(&space->doubled, base_size);
   for (size_t o = 0; o < space->octaves.size(); ++o) {
     const cv::Size size(base_size.width >> o, base_size.height >> o);
     space->octaves[o].gaussians.resize(num_layers);
     for (cv::Mat& gaussian : space->octaves[o].gaussians) layout.emplace_back(&gaussian, size);
   }
-  space->dog_buffers.resize(num_layers - 1);
+  space->dog_buffers.resize(num_layers - 1);  // At least 3.
   for (cv::Mat& buffer : space->dog_buffers) layout.emplace_back(&buffer, base_size);
-  layout.emplace_back(&space->magnitude_buffer, base_size);
-  layout.emplace_back(&space->angle_buffer, base_size);
 
   constexpr size_t kAlignment = 64;
   const auto padded_bytes = [](cv::Size size) {
@@ -180,11 +180,14 @@ void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOpti
   auto* next = static_cast<unsigned char*>(space->memory.Reserve(total));
   for (const auto& [mat, size] : layout) {
     // A header over the block: create() with this size and type keeps it.
-    if (mat->data != next || mat->size() != size || mat->type() != CV_32F) {
-      *mat = cv::Mat(size, CV_32F, next);
-    }
+    *mat = cv::Mat(size, CV_32F, next);
     next += padded_bytes(size);
   }
+  const std::vector<cv::Mat>& dogs = space->dog_buffers;
+  space->input = cv::Mat(input_size, CV_32F, dogs.front().data);
+  space->doubled = cv::Mat(base_size, CV_32F, dogs.back().data);
+  space->magnitude_buffer = cv::Mat(base_size, CV_32F, dogs[1].data);
+  space->angle_buffer = cv::Mat(base_size, CV_32F, dogs[2].data);
 }
 
 // The base image of the scale space (the input as floats in [0, 1], doubled for octave -1)
