@@ -29,8 +29,7 @@ void SymmetricTapsTail(const float* const* before, const float* const* after, in
 }
 
 void SymmetricTapsBlock(const float* const* before, const float* const* after, int offset,
-                        const float* centre, const Float8* taps, int radius, float* out,
-                        const float* subtrahend, float* difference) {
+                        const float* centre, const Float8* taps, int radius, float* out) {
   Float8 acc0 = taps[0] * Load8(centre), acc1 = taps[0] * Load8(centre + 8),
          acc2 = taps[0] * Load8(centre + 16), acc3 = taps[0] * Load8(centre + 24);
   for (int i = 1; i <= radius; ++i) {
@@ -46,30 +45,17 @@ void SymmetricTapsBlock(const float* const* before, const float* const* after, i
   Store8(out + 8, acc1);
   Store8(out + 16, acc2);
   Store8(out + 24, acc3);
-  if (difference != nullptr) {
-    Store8(difference, acc0 - Load8(subtrahend));
-    Store8(difference + 8, acc1 - Load8(subtrahend + 8));
-    Store8(difference + 16, acc2 - Load8(subtrahend + 16));
-    Store8(difference + 24, acc3 - Load8(subtrahend + 24));
-  }
 }
 
-// One row of `width` outputs, from the kernel's taps each broadcast to a register; with
-// `difference`, also difference = out - subtrahend.
+// One row of `width` outputs, from the kernel's taps each broadcast to a register.
 void FilterRow(const float* const* before, const float* const* after, const float* centre,
-               const std::vector<Float8>& taps, int width, float* out,
-               const float* subtrahend = nullptr, float* difference = nullptr) {
+               const std::vector<Float8>& taps, int width, float* out) {
   const int radius = static_cast<int>(taps.size()) - 1;
   int x = 0;
   for (; x + kBlock <= width; x += kBlock) {
-    SymmetricTapsBlock(before, after, x, centre + x, taps.data(), radius, out + x,
-                       subtrahend == nullptr ? nullptr : subtrahend + x,
-                       difference == nullptr ? nullptr : difference + x);
+    SymmetricTapsBlock(before, after, x, centre + x, taps.data(), radius, out + x);
   }
   SymmetricTapsTail(before, after, x, centre + x, taps.data(), radius, width - x, out + x);
-  if (difference != nullptr) {
-    for (; x < width; ++x) difference[x] = out[x] - subtrahend[x];
-  }
 }
 
 }  // namespace
@@ -84,15 +70,10 @@ std::vector<float> GaussianHalfKernel(double sigma) {
   return half;
 }
 
-void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst, cv::Mat* difference) {
+void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst) {
   PARALLAX_CHECK(dst != nullptr);
   PARALLAX_CHECK_EQ(src.type(), CV_32F);
   PARALLAX_CHECK(dst->data == nullptr || dst->data != src.data);
-  if (difference != nullptr) {
-    PARALLAX_CHECK(difference->data == nullptr ||
-                   (difference->data != src.data && difference->data != dst->data));
-    difference->create(src.size(), CV_32F);
-  }
   const std::vector<float> kernel = GaussianHalfKernel(sigma);
   const int radius = static_cast<int>(kernel.size()) - 1;
   std::vector<Float8> taps(kernel.size());
@@ -117,8 +98,7 @@ void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst, cv::Mat* diffe
     FilterRow(up.data(), down.data(), src.ptr<float>(r), taps, cols, column_pass);
     std::fill(padded.begin(), padded.begin() + radius, column_pass[0]);
     std::fill(padded.end() - radius, padded.end(), column_pass[cols - 1]);
-    FilterRow(left.data(), right.data(), column_pass, taps, cols, dst->ptr<float>(r),
-              src.ptr<float>(r), difference == nullptr ? nullptr : difference->ptr<float>(r));
+    FilterRow(left.data(), right.data(), column_pass, taps, cols, dst->ptr<float>(r));
   }
 }
 

@@ -16,8 +16,7 @@ std::vector<float> GaussianHalfKernel(double sigma);
 // space is mostly this blur; OpenCV's filter engine copies every row into a bordered buffer and
 // sums the horizontal pass without the kernel's symmetry, and took 1.6 times as long. One output
 // row at a time: its vertical pass into a padded row that stays in L1, then the horizontal pass
-// from it. With `difference`, also *difference = *dst - src (SIFT's difference of Gaussians), each
-// row while it is in cache. Outputs must not share data with `src` or each other.
-void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst, cv::Mat* difference = nullptr);
+// from it. `dst` must not share data with `src`.
+void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst);
 
 }  // namespace parallax

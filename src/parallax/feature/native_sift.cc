@@ -65,8 +65,8 @@ struct NativeSiftScaleSpace {
   std::vector<double> increments;  // Blur from layer k - 1 to layer k.
   double first_blur = 0;           // Blur from the base image to the first layer.
   std::vector<Octave> octaves;
-  // Sized for the first octave; later octaves use their top-left corner.
-  std::vector<cv::Mat> dog_buffers;
+  // Three rows of one difference of Gaussians, where the extrema screen reads them.
+  std::vector<float> dog_rows;
   cv::Mat magnitude_buffer, angle_buffer;
   cv::Mat dx_rows, dy_rows;    // A band of rows of differences, converted to polar at once.
   std::vector<float> samples;  // One row of a descriptor's samples.
@@ -152,12 +152,13 @@ Gradient LayerGradient(const cv::Mat& image, const GradientRegion& region, Scale
 }
 
 // Points every float image of the scale space (input, doubled input, each octave's
-// Gaussian layers, the differences, the gradient) into one huge-page block, laid out the
-// same way for every image of a size, so that the same pages serve image after image.
-// Images used in different phases share memory, which the first image of each thread pays
-// to fault in: the input and its doubled copy are read only by octave 0's first blur,
-// before any difference is written, and the gradient only once every octave's extrema are
-// found, when the differences are done with.
+// Gaussian layers, the gradient) into one huge-page block, laid out the same way for every
+// image of a size, so that the same pages serve image after image. Images used in
+// different phases share memory, which the first image of each thread pays to fault in:
+// the input and its doubled copy are read only by the first octave's first blur, before
+// its last two layers are written, and nothing reads an octave's last layer once its
+// differences are screened (frames are described on layers 0 to S + 1), so the gradient's
+// magnitude lies over the first octave's.
 void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOptions& options,
                    ScaleSpace* space) {
   const int num_layers = options.num_octave_layers + 3;
@@ -167,8 +168,14 @@ void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOpti
     space->octaves[o].gaussians.resize(num_layers);
     for (cv::Mat& gaussian : space->octaves[o].gaussians) layout.emplace_back(&gaussian, size);
   }
-  space->dog_buffers.resize(num_layers - 1);  // At least 3.
-  for (cv::Mat& buffer : space->dog_buffers) layout.emplace_back(&buffer, base_size);
+  layout.emplace_back(&space->angle_buffer, base_size);
+  // An image too small for one octave has no layers to share.
+  const bool shared = !space->octaves.empty();
+  if (!shared) {
+    layout.emplace_back(&space->input, input_size);
+    layout.emplace_back(&space->doubled, base_size);
+    layout.emplace_back(&space->magnitude_buffer, base_size);
+  }
 
   constexpr size_t kAlignment = 64;
   const auto padded_bytes = [](cv::Size size) {
@@ -183,11 +190,11 @@ void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOpti
     *mat = cv::Mat(size, CV_32F, next);
     next += padded_bytes(size);
   }
-  const std::vector<cv::Mat>& dogs = space->dog_buffers;
-  space->input = cv::Mat(input_size, CV_32F, dogs.front().data);
-  space->doubled = cv::Mat(base_size, CV_32F, dogs.back().data);
-  space->magnitude_buffer = cv::Mat(base_size, CV_32F, dogs[1].data);
-  space->angle_buffer = cv::Mat(base_size, CV_32F, dogs[2].data);
+  if (!shared) return;
+  const std::vector<cv::Mat>& first = space->octaves.front().gaussians;
+  space->input = cv::Mat(input_size, CV_32F, first[num_layers - 2].data);
+  space->doubled = cv::Mat(base_size, CV_32F, first[num_layers - 1].data);
+  space->magnitude_buffer = cv::Mat(base_size, CV_32F, first[num_layers - 1].data);
 }
 
 // The base image of the scale space (the input as floats in [0, 1], doubled for octave -1)
@@ -225,12 +232,10 @@ void PrepareScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, Sc
       std::sqrt(std::max(options.sigma * options.sigma - input_blur * input_blur, 0.01));
 }
 
-// Builds octave o (after o - 1) and returns its differences of Gaussians, in the corners of
-// the shared buffers (valid until the next octave is built): layer k has sigma * 2^(k / S) in
-// the octave's pixels, each layer blurred from the one below it, and the octave starts from
-// the previous one's layer S (twice its first layer's blur) sampled at every other pixel.
-// Each difference is taken as its layer is blurred, while the rows are in cache.
-std::vector<cv::Mat> BuildOctave(int o, ScaleSpace* space) {
+// Builds octave o (after o - 1): layer k has sigma * 2^(k / S) in the octave's pixels, each
+// layer blurred from the one below it, and the octave starts from the previous one's layer S
+// (twice its first layer's blur) sampled at every other pixel.
+void BuildOctave(int o, ScaleSpace* space) {
   Octave& octave = space->octaves[o];
   const int num_layers = static_cast<int>(space->increments.size());
   octave.index = space->first_octave + o;
@@ -242,15 +247,32 @@ std::vector<cv::Mat> BuildOctave(int o, ScaleSpace* space) {
     cv::resize(previous, octave.gaussians[0], cv::Size(previous.cols / 2, previous.rows / 2), 0, 0,
                cv::INTER_NEAREST);
   }
-  std::vector<cv::Mat> dogs;
-  const cv::Rect corner(cv::Point(0, 0), octave.gaussians[0].size());
   for (int k = 1; k < num_layers; ++k) {
-    cv::Mat dog = space->dog_buffers[k - 1](corner);
-    GaussianBlur(octave.gaussians[k - 1], space->increments[k], &octave.gaussians[k], &dog);
-    dogs.push_back(dog);
+    GaussianBlur(octave.gaussians[k - 1], space->increments[k], &octave.gaussians[k]);
   }
-  return dogs;
 }
+
+// The differences of Gaussians of one octave, read from its layers where they are needed:
+// difference k is layer k + 1 minus layer k, the float a blur storing it would have stored.
+// Kept in buffers of their own, they were five more images per thread to fault in and five
+// more streams of stores per octave.
+class Differences {
+ public:
+  explicit Differences(const std::vector<cv::Mat>& gaussians) : gaussians_(gaussians) {}
+  int rows() const { return gaussians_[0].rows; }
+  int cols() const { return gaussians_[0].cols; }
+  float At(int layer, int r, int c) const {
+    return gaussians_[layer + 1].ptr<float>(r)[c] - gaussians_[layer].ptr<float>(r)[c];
+  }
+  void Row(int layer, int r, float* __restrict out) const {
+    const float* __restrict upper = gaussians_[layer + 1].ptr<float>(r);
+    const float* __restrict lower = gaussians_[layer].ptr<float>(r);
+    for (int c = 0; c < cols(); ++c) out[c] = upper[c] - lower[c];
+  }
+
+ private:
+  const std::vector<cv::Mat>& gaussians_;
+};
 
 // An extremum refined to sub-sample precision in (column, row, layer).
 struct Extremum {
@@ -262,30 +284,28 @@ struct Extremum {
 // Whether the sample is at least as large (positive) or as small (negative) as its 18
 // neighbours in the layers above and below. ScreenRow has already compared it with the 8 in
 // its own layer: together, Lowe's 26-neighbour test.
-bool IsExtremumAcrossScales(const std::vector<cv::Mat>& dogs, int layer, int r, int c) {
-  const float value = dogs[layer].ptr<float>(r)[c];
-  const auto beaten_in = [&](const cv::Mat& dog) {
+bool IsExtremumAcrossScales(const Differences& dogs, int layer, int r, int c) {
+  const float value = dogs.At(layer, r, c);
+  const auto beaten_in = [&](int other) {
     for (int rr = r - 1; rr <= r + 1; ++rr) {
-      const float* row = dog.ptr<float>(rr);
       for (int cc = c - 1; cc <= c + 1; ++cc) {
-        if (value > 0 ? row[cc] > value : row[cc] < value) return true;
+        const float neighbour = dogs.At(other, rr, cc);
+        if (value > 0 ? neighbour > value : neighbour < value) return true;
       }
     }
     return false;
   };
-  return !beaten_in(dogs[layer - 1]) && !beaten_in(dogs[layer + 1]);
+  return !beaten_in(layer - 1) && !beaten_in(layer + 1);
 }
 
 // candidates[c] = 1 where sample (r, c) passes the contrast screen and is an extremum of the
 // 3 x 3 samples around it in its own layer: the cheap tests, in a loop without branches that
 // the compiler vectorises, so that IsExtremumAcrossScales sees a few samples of each row
-// instead of all. Needs rows r - 1 and r + 1.
-void ScreenRow(const cv::Mat& dog, int r, float screen, std::vector<uint8_t>* candidates) {
-  const int cols = dog.cols;
+// instead of all. Takes the difference's rows r - 1, r and r + 1.
+void ScreenRow(const float* __restrict above, const float* __restrict row,
+               const float* __restrict below, int cols, float screen,
+               std::vector<uint8_t>* candidates) {
   candidates->assign(cols, 0);
-  const float* __restrict above = dog.ptr<float>(r - 1);
-  const float* __restrict row = dog.ptr<float>(r);
-  const float* __restrict below = dog.ptr<float>(r + 1);
   uint8_t* __restrict out = candidates->data();
   // Ternaries, not std::max/min, which the compiler does not turn into vector max/min.
   const auto max2 = [](float a, float b) { return a > b ? a : b; };
@@ -313,28 +333,20 @@ struct DogDerivatives {
   float dxx = 0, dyy = 0, dss = 0, dxy = 0, dxs = 0, dys = 0;
 };
 
-DogDerivatives DerivativesAt(const std::vector<cv::Mat>& dogs, int layer, int r, int c) {
-  const float* prev = dogs[layer - 1].ptr<float>(r);
-  const float* curr = dogs[layer].ptr<float>(r);
-  const float* next = dogs[layer + 1].ptr<float>(r);
-  const float* up = dogs[layer].ptr<float>(r - 1);
-  const float* down = dogs[layer].ptr<float>(r + 1);
-  const float* prev_up = dogs[layer - 1].ptr<float>(r - 1);
-  const float* prev_down = dogs[layer - 1].ptr<float>(r + 1);
-  const float* next_up = dogs[layer + 1].ptr<float>(r - 1);
-  const float* next_down = dogs[layer + 1].ptr<float>(r + 1);
+DogDerivatives DerivativesAt(const Differences& dogs, int layer, int r, int c) {
+  const auto at = [&](int dl, int dr, int dc) { return dogs.At(layer + dl, r + dr, c + dc); };
   DogDerivatives d;
-  d.value = curr[c];
-  const float v2 = 2.0f * curr[c];
-  d.gradient[0] = 0.5f * (curr[c + 1] - curr[c - 1]);
-  d.gradient[1] = 0.5f * (down[c] - up[c]);
-  d.gradient[2] = 0.5f * (next[c] - prev[c]);
-  d.dxx = curr[c + 1] + curr[c - 1] - v2;
-  d.dyy = down[c] + up[c] - v2;
-  d.dss = next[c] + prev[c] - v2;
-  d.dxy = 0.25f * (down[c + 1] - down[c - 1] - up[c + 1] + up[c - 1]);
-  d.dxs = 0.25f * (next[c + 1] - next[c - 1] - prev[c + 1] + prev[c - 1]);
-  d.dys = 0.25f * (next_down[c] - next_up[c] - prev_down[c] + prev_up[c]);
+  d.value = at(0, 0, 0);
+  const float v2 = 2.0f * d.value;
+  d.gradient[0] = 0.5f * (at(0, 0, 1) - at(0, 0, -1));
+  d.gradient[1] = 0.5f * (at(0, 1, 0) - at(0, -1, 0));
+  d.gradient[2] = 0.5f * (at(1, 0, 0) - at(-1, 0, 0));
+  d.dxx = at(0, 0, 1) + at(0, 0, -1) - v2;
+  d.dyy = at(0, 1, 0) + at(0, -1, 0) - v2;
+  d.dss = at(1, 0, 0) + at(-1, 0, 0) - v2;
+  d.dxy = 0.25f * (at(0, 1, 1) - at(0, 1, -1) - at(0, -1, 1) + at(0, -1, -1));
+  d.dxs = 0.25f * (at(1, 0, 1) - at(1, 0, -1) - at(-1, 0, 1) + at(-1, 0, -1));
+  d.dys = 0.25f * (at(1, 1, 0) - at(1, -1, 0) - at(-1, 1, 0) + at(-1, -1, 0));
   return d;
 }
 
@@ -343,10 +355,9 @@ DogDerivatives DerivativesAt(const std::vector<cv::Mat>& dogs, int layer, int r,
 // it (VLFeat's rule: the layer stays), fitting up to five samples; the last fit is always
 // at the sample it ends on. False when that fit is 1.5 samples or more away, outside the
 // octave's scales, of low contrast, or on an edge.
-bool RefineExtremum(const std::vector<cv::Mat>& dogs, const NativeSiftOptions& options,
-                    Extremum* extremum) {
+bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options, Extremum* extremum) {
   const int layers = options.num_octave_layers;
-  const int rows = dogs[0].rows, cols = dogs[0].cols;
+  const int rows = dogs.rows(), cols = dogs.cols();
   const int layer = extremum->layer;
   int r = extremum->row, c = extremum->col;
   DogDerivatives d;
@@ -735,13 +746,21 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
   std::vector<Detection> extrema;
   std::vector<uint8_t> candidates;
   for (int o = 0; o < static_cast<int>(space.octaves.size()); ++o) {
-    const std::vector<cv::Mat> dogs = BuildOctave(o, &space);
+    BuildOctave(o, &space);
     const Octave& octave = space.octaves[o];
+    const Differences dogs(octave.gaussians);
     const float pixel_size = std::ldexp(1.0f, octave.index);
-    const int rows = dogs[0].rows, cols = dogs[0].cols;
+    const int rows = dogs.rows(), cols = dogs.cols();
+    // The screen's three rows of the difference, computed once each, in turn.
+    space.dog_rows.resize(3 * static_cast<size_t>(cols));
+    const auto dog_row = [&](int r) { return space.dog_rows.data() + (r % 3) * cols; };
     for (int layer = 1; layer <= layers; ++layer) {
+      if (rows <= 2 * kImageBorder) break;
+      dogs.Row(layer, kImageBorder - 1, dog_row(kImageBorder - 1));
+      dogs.Row(layer, kImageBorder, dog_row(kImageBorder));
       for (int r = kImageBorder; r < rows - kImageBorder; ++r) {
-        ScreenRow(dogs[layer], r, screen, &candidates);
+        dogs.Row(layer, r + 1, dog_row(r + 1));
+        ScreenRow(dog_row(r - 1), dog_row(r), dog_row(r + 1), cols, screen, &candidates);
         for (int c = kImageBorder; c < cols - kImageBorder; ++c) {
           // Most samples fail the screen: skip them eight at a time.
           if (c + 8 <= cols - kImageBorder) {
@@ -762,9 +781,11 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
           const float layer_position = extremum.layer + extremum.offset_layer;
           detection.octave_scale =
               static_cast<float>(options.sigma * std::pow(2.0, layer_position / layers));
-          // Orientation and descriptor are measured on the Gaussian layer nearest in scale.
+          // Orientation and descriptor are measured on the Gaussian layer nearest in scale:
+          // 0 to S + 1, since RefineExtremum keeps layer_position in [0, S + 1] (the last
+          // layer's memory holds the gradient meanwhile, see LayOutBuffers).
           detection.layer =
-              std::clamp(static_cast<int>(std::lround(layer_position)), 0, layers + 2);
+              std::clamp(static_cast<int>(std::lround(layer_position)), 0, layers + 1);
           detection.frame.x = pixel_size * detection.x + origin;
           detection.frame.y = pixel_size * detection.y + origin;
           detection.frame.scale = pixel_size * detection.octave_scale;
