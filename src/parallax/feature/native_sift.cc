@@ -754,8 +754,7 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
     // The screen's three rows of the difference, computed once each, in turn.
     space.dog_rows.resize(3 * static_cast<size_t>(cols));
     const auto dog_row = [&](int r) { return space.dog_rows.data() + (r % 3) * cols; };
-    for (int layer = 1; layer <= layers; ++layer) {
-      if (rows <= 2 * kImageBorder) break;
+    for (int layer = 1; layer <= layers && rows > 2 * kImageBorder; ++layer) {
       dogs.Row(layer, kImageBorder - 1, dog_row(kImageBorder - 1));
       dogs.Row(layer, kImageBorder, dog_row(kImageBorder));
       for (int r = kImageBorder; r < rows - kImageBorder; ++r) {

@@ -42,18 +42,16 @@ class WorkerPool {
       }
       task_ = &task;
       num_wanted_ = count;
-      num_running_ = count;
-      ++generation_;
-      published_.store(generation_, std::memory_order_release);
-      running_.store(count, std::memory_order_release);
+      num_running_.store(count, std::memory_order_release);
+      generation_.fetch_add(1, std::memory_order_release);
     }
     wake_.notify_all();
     t_in_pool = true;
     task();
     t_in_pool = false;
-    SpinWhile([this] { return running_.load(std::memory_order_acquire) != 0; });
+    SpinWhile([this] { return num_running_.load(std::memory_order_acquire) != 0; });
     std::unique_lock<std::mutex> lock(mutex_);
-    done_.wait(lock, [this] { return num_running_ == 0; });
+    done_.wait(lock, [this] { return num_running_.load() == 0; });
     task_ = nullptr;
     return true;
   }
@@ -82,17 +80,16 @@ class WorkerPool {
     t_in_pool = true;
     uint64_t seen = 0;
     for (;;) {
-      SpinWhile([&] { return published_.load(std::memory_order_acquire) == seen; });
+      SpinWhile([&] { return generation_.load(std::memory_order_acquire) == seen; });
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] { return generation_ != seen; });
-      seen = generation_;
+      wake_.wait(lock, [&] { return generation_.load() != seen; });
+      seen = generation_.load();
       if (index >= num_wanted_) continue;
       const std::function<void()>* task = task_;
       lock.unlock();
       (*task)();
       lock.lock();
-      running_.fetch_sub(1, std::memory_order_release);
-      if (--num_running_ == 0) done_.notify_one();
+      if (num_running_.fetch_sub(1, std::memory_order_release) == 1) done_.notify_one();
     }
   }
 
@@ -107,16 +104,15 @@ class WorkerPool {
     return pool;
   }
   std::mutex caller_mutex_;  // Held by the thread whose loop the pool runs.
-  std::mutex mutex_;         // Guards what follows.
+  // Guards what follows (changed only under it; the two atomics are also read without it,
+  // by spinning threads).
+  std::mutex mutex_;
   std::condition_variable wake_, done_;
   int num_threads_ = 0;
   const std::function<void()>* task_ = nullptr;
-  int num_wanted_ = 0;   // Pool threads that run the current task.
-  int num_running_ = 0;  // Of those, the ones not finished.
-  uint64_t generation_ = 0;
-  // Copies of generation_ and num_running_ that spinning threads read without the mutex.
-  std::atomic<uint64_t> published_{0};
-  std::atomic<int> running_{0};
+  int num_wanted_ = 0;               // Pool threads that run the current task.
+  std::atomic<int> num_running_{0};  // Of those, the ones not finished.
+  std::atomic<uint64_t> generation_{0};
 };
 
 }  // namespace
