@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <random>
 
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
+#include "parallax/util/threading.h"
 
 namespace parallax {
 namespace {
@@ -15,15 +17,21 @@ namespace {
 // Rows whose similarities to the centroids are computed at once (a 256 x 32 tile).
 constexpr int kRowChunk = 256;
 
-// The `count` largest of values[0, n) by index, largest first, ties to the lower index.
+// The `count` largest of values[0, n) by index, largest first, ties to the lower index: an
+// insertion into the kept list, which for 1 to 4 of 32 cells is a few compares per value
+// where a partial sort of the indices took a tenth of training.
 void TopIndices(const float* values, int n, int count, uint16_t* out) {
-  uint16_t order[256];
-  PARALLAX_CHECK_LE(n, 256);
-  std::iota(order, order + n, uint16_t{0});
-  std::partial_sort(order, order + count, order + n, [values](uint16_t a, uint16_t b) {
-    return values[a] != values[b] ? values[a] > values[b] : a < b;
-  });
-  std::copy_n(order, count, out);
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    const float value = values[i];
+    // Strictly greater: an equal value is at a higher index than the kept one, so after it.
+    if (kept == count && !(value > values[out[kept - 1]])) continue;
+    int position = kept < count ? kept++ : count - 1;
+    for (; position > 0 && value > values[out[position - 1]]; --position) {
+      out[position] = out[position - 1];
+    }
+    out[position] = static_cast<uint16_t>(i);
+  }
 }
 
 // Cosine similarity of two rows, exactly as the kernels compute it.
@@ -33,13 +41,14 @@ float RowSimilarity(const MatchableDescriptors& rows, int a, int b) {
   return static_cast<float>(dot) * rows.scales[a] * rows.scales[b];
 }
 
-// k-means++ seeding (Arthur & Vassilvitskii 2007) on the first kMaxSeedingRows rows: each
+// k-means++ seeding (Arthur & Vassilvitskii 2007) on the rows order[0, kMaxSeedingRows): each
 // seed is drawn with probability proportional to its squared distance to the nearest seed so
-// far, so that well-separated groups each get one.
-std::vector<int> KMeansPlusPlusSeeds(const MatchableDescriptors& rows, int count,
+// far, so that well-separated groups each get one. Returns rows.
+std::vector<int> KMeansPlusPlusSeeds(const MatchableDescriptors& rows,
+                                     const std::vector<int>& order, int count,
                                      std::mt19937_64* generator) {
   constexpr int kMaxSeedingRows = 20000;
-  const int num_rows = std::min(rows.NumRows(), kMaxSeedingRows);
+  const int num_rows = std::min(static_cast<int>(order.size()), kMaxSeedingRows);
   std::vector<int> seeds = {
       static_cast<int>(std::uniform_int_distribution<int>(0, num_rows - 1)(*generator))};
   std::vector<double> distance(num_rows, std::numeric_limits<double>::infinity());
@@ -47,7 +56,8 @@ std::vector<int> KMeansPlusPlusSeeds(const MatchableDescriptors& rows, int count
     double total = 0;
     for (int i = 0; i < num_rows; ++i) {
       // ||a - b||^2 = 2 - 2 a.b for unit rows.
-      const double to_last = std::max(0.0, 2.0 - 2.0 * RowSimilarity(rows, i, seeds.back()));
+      const double to_last =
+          std::max(0.0, 2.0 - 2.0 * RowSimilarity(rows, order[i], order[seeds.back()]));
       distance[i] = std::min(distance[i], to_last);
       total += distance[i];
     }
@@ -60,6 +70,7 @@ std::vector<int> KMeansPlusPlusSeeds(const MatchableDescriptors& rows, int count
     }
     seeds.push_back(next);
   }
+  for (int& seed : seeds) seed = order[seed];
   return seeds;
 }
 
@@ -71,9 +82,10 @@ void DescriptorCellsOptions::Check() const {
   PARALLAX_CHECK_GT(num_assignments, 0);
   PARALLAX_CHECK_GT(max_training_descriptors, 0);
   PARALLAX_CHECK_GT(kmeans_iterations, 0);
+  PARALLAX_CHECK(num_threads == -1 || num_threads > 0);
 }
 
-DescriptorCells DescriptorCells::Train(const FeatureDescriptors& sample,
+DescriptorCells DescriptorCells::Train(FeatureDescriptors sample,
                                        const DescriptorCellsOptions& options) {
   options.Check();
   const int num_rows = static_cast<int>(sample.rows());
@@ -86,20 +98,35 @@ DescriptorCells DescriptorCells::Train(const FeatureDescriptors& sample,
   Shuffle(static_cast<size_t>(num_training), &order, &generator);
   order.resize(num_training);
   const int num_cells = std::min(options.num_cells, num_training);
-  FeatureDescriptors training(num_training, dim);
-  for (int i = 0; i < num_training; ++i) training.row(i) = sample.row(order[i]);
-  const MatchableDescriptors rows = PrepareDescriptors(training);
+  // The training rows: the whole sample where it is small enough, else the rows the shuffle
+  // chose, in its order. Seeding follows the shuffled order either way; the assignments and
+  // the integer means do not depend on the order of the rows, so the cells are the same as
+  // from a shuffled copy, without one (a fresh copy of a collection's sample cost more on
+  // this kind of machine, in first touches of its memory, than the k-means steps).
+  MatchableDescriptors rows;
+  if (num_training < num_rows) {
+    const auto row_bytes = static_cast<size_t>(dim);
+    FeatureDescriptors training(num_training, dim);
+    for (int i = 0; i < num_training; ++i) {
+      std::memcpy(training.data() + static_cast<size_t>(i) * row_bytes,
+                  sample.data() + static_cast<size_t>(order[i]) * row_bytes, row_bytes);
+    }
+    std::iota(order.begin(), order.end(), 0);
+    rows = PrepareDescriptors(std::move(training));
+  } else {
+    rows = PrepareDescriptors(std::move(sample));
+  }
 
   DescriptorCells cells;
   cells.centroids_.resize(num_cells, dim);
-  const std::vector<int> seeds = KMeansPlusPlusSeeds(rows, num_cells, &generator);
+  const std::vector<int> seeds = KMeansPlusPlusSeeds(rows, order, num_cells, &generator);
   for (int cell = 0; cell < num_cells; ++cell)
-    cells.centroids_.row(cell) = training.row(seeds[cell]);
+    cells.centroids_.row(cell) = rows.bytes.row(seeds[cell]);
   std::vector<uint16_t> assignment(num_training, 0), previous;
   for (int iteration = 0; iteration < options.kmeans_iterations; ++iteration) {
     cells.Pack();
     previous = assignment;
-    assignment = cells.NearestCells(rows, 1);
+    assignment = cells.NearestCells(rows, 1, options.num_threads);
     if (iteration > 0 && assignment == previous) break;
     // Each centroid moves to the mean of its rows (rounded to bytes); an empty cell stays.
     std::vector<int64_t> sums(static_cast<size_t>(num_cells) * dim, 0);
@@ -107,7 +134,9 @@ DescriptorCells DescriptorCells::Train(const FeatureDescriptors& sample,
     for (int i = 0; i < num_training; ++i) {
       const int cell = assignment[i];
       ++counts[cell];
-      for (int k = 0; k < dim; ++k) sums[static_cast<size_t>(cell) * dim + k] += training(i, k);
+      const uint8_t* row = rows.bytes.data() + static_cast<size_t>(i) * dim;
+      int64_t* sum = sums.data() + static_cast<size_t>(cell) * dim;
+      for (int k = 0; k < dim; ++k) sum[k] += row[k];
     }
     for (int cell = 0; cell < num_cells; ++cell) {
       if (counts[cell] == 0) continue;
@@ -130,7 +159,7 @@ void DescriptorCells::Pack() {
 }
 
 std::vector<uint16_t> DescriptorCells::NearestCells(const MatchableDescriptors& descriptors,
-                                                    int count) const {
+                                                    int count, int num_threads) const {
   const int num_cells = NumCells();
   PARALLAX_CHECK_GT(num_cells, 0);
   PARALLAX_CHECK_GT(count, 0);
@@ -139,8 +168,11 @@ std::vector<uint16_t> DescriptorCells::NearestCells(const MatchableDescriptors& 
   const PackedSimilarityColumns& packed = packed_;
   const int num_rows = descriptors.NumRows();
   std::vector<uint16_t> nearest(static_cast<size_t>(num_rows) * count);
-  std::vector<float> tile(static_cast<size_t>(kRowChunk) * packed.num_columns);
-  for (int r0 = 0; r0 < num_rows; r0 += kRowChunk) {
+  const int num_chunks = (num_rows + kRowChunk - 1) / kRowChunk;
+  ParallelFor(0, static_cast<size_t>(num_chunks), num_threads, [&](size_t chunk_index) {
+    thread_local std::vector<float> tile;
+    tile.resize(static_cast<size_t>(kRowChunk) * packed.num_columns);
+    const int r0 = static_cast<int>(chunk_index) * kRowChunk;
     const int chunk = std::min(kRowChunk, num_rows - r0);
     const SimilarityRows rows{descriptors.bytes.row(r0).data(), descriptors.scales.data() + r0,
                               descriptors.sums.data() + r0, chunk};
@@ -149,7 +181,7 @@ std::vector<uint16_t> DescriptorCells::NearestCells(const MatchableDescriptors& 
       TopIndices(tile.data() + static_cast<ptrdiff_t>(j) * packed.num_columns, num_cells, count,
                  nearest.data() + static_cast<size_t>(r0 + j) * count);
     }
-  }
+  });
   return nearest;
 }
 

@@ -21,6 +21,8 @@ struct DescriptorCellsOptions {
   int max_training_descriptors = 100000;
   int kmeans_iterations = 10;
   uint64_t seed = 0;  // The training sample and the first centroids.
+  int num_threads =
+      1;  // Training's assignment steps; -1: all cores. The cells do not depend on it.
   void Check() const;
 };
 
@@ -33,14 +35,16 @@ class DescriptorCells {
 
   // Spherical k-means (cosine similarity) on up to max_training_descriptors rows of `sample`,
   // chosen with the seed, from k-means++ seeds drawn with it.
-  static DescriptorCells Train(const FeatureDescriptors& sample,
-                               const DescriptorCellsOptions& options);
+  static DescriptorCells Train(FeatureDescriptors sample, const DescriptorCellsOptions& options);
 
   int NumCells() const { return static_cast<int>(centroids_.rows()); }
+  const FeatureDescriptors& Centroids() const { return centroids_; }
 
   // The `count` most similar cells of each row, most similar first (ties: lower cell):
   // result[row * count + k].
-  std::vector<uint16_t> NearestCells(const MatchableDescriptors& descriptors, int count) const;
+  // Row chunks run on up to num_threads threads (the result does not depend on how many).
+  std::vector<uint16_t> NearestCells(const MatchableDescriptors& descriptors, int count,
+                                     int num_threads = 1) const;
 
  private:
   void Pack();  // packed_ from centroids_.

@@ -99,6 +99,69 @@ TEST(DescriptorCells, TrainingIsDeterministicForASeed) {
   EXPECT_NE(first, DescriptorCells::Train(bytes, options).NearestCells(prepared, 2));
 }
 
+// NearestCells against a full sort of each row's similarities to the centroids, computed here
+// as the kernels compute them (float of the integer dot product, times the centroid's scale,
+// times the row's), by value, largest first, then by cell.
+void ExpectNearestCellsAreTheTopOfAFullSort(const DescriptorCells& cells,
+                                            const FeatureDescriptors& bytes, int count,
+                                            int num_threads) {
+  const MatchableDescriptors rows = PrepareDescriptors(bytes);
+  const MatchableDescriptors centroids = PrepareDescriptors(cells.Centroids());
+  const std::vector<uint16_t> nearest = cells.NearestCells(rows, count, num_threads);
+  ASSERT_EQ(nearest.size(), static_cast<size_t>(rows.NumRows()) * count);
+  for (int row = 0; row < rows.NumRows(); ++row) {
+    std::vector<std::pair<float, int>> ranked;
+    for (int cell = 0; cell < cells.NumCells(); ++cell) {
+      int32_t dot = 0;
+      for (int k = 0; k < 128; ++k) dot += int32_t{bytes(row, k)} * centroids.bytes(cell, k);
+      ranked.emplace_back(static_cast<float>(dot) * centroids.scales[cell] * rows.scales[row],
+                          cell);
+    }
+    std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
+      return a.first != b.first ? a.first > b.first : a.second < b.second;
+    });
+    for (int k = 0; k < count; ++k) {
+      EXPECT_EQ(nearest[static_cast<size_t>(row) * count + k], ranked[k].second)
+          << "row " << row << ", rank " << k;
+    }
+  }
+}
+
+TEST(DescriptorCells, NearestCellsAreTheTopOfAFullSortOnAnyNumberOfThreads) {
+  std::mt19937_64 generator(5);
+  const FeatureDescriptors bytes = GroupedDescriptors(12, 60, 0.3, &generator);
+  DescriptorCellsOptions options;
+  options.num_cells = 12;
+  const DescriptorCells cells = DescriptorCells::Train(bytes, options);
+  for (const int num_threads : {1, 2, 3}) {
+    ExpectNearestCellsAreTheTopOfAFullSort(cells, bytes, 4, num_threads);
+    ExpectNearestCellsAreTheTopOfAFullSort(cells, bytes, 1, num_threads);
+  }
+  // Training's assignment steps on several threads give the same cells.
+  options.num_threads = 3;
+  EXPECT_EQ(DescriptorCells::Train(bytes, options).Centroids(), cells.Centroids());
+}
+
+TEST(DescriptorCells, EqualSimilaritiesRankTheLowerCellFirst) {
+  // Two distinct rows, twenty copies each, in four cells: at least two centroids are equal,
+  // and every row ties between them.
+  FeatureDescriptors bytes(40, 128);
+  bytes.setZero();
+  for (int i = 0; i < 40; ++i) bytes(i, i % 2) = 200;
+  DescriptorCellsOptions options;
+  options.num_cells = 4;
+  const DescriptorCells cells = DescriptorCells::Train(bytes, options);
+  ASSERT_EQ(cells.NumCells(), 4);
+  bool some_equal = false;
+  for (int a = 0; a < 4; ++a) {
+    for (int b = a + 1; b < 4; ++b)
+      some_equal |= cells.Centroids().row(a) == cells.Centroids().row(b);
+  }
+  ASSERT_TRUE(some_equal);
+  ExpectNearestCellsAreTheTopOfAFullSort(cells, bytes, 4, 1);
+  ExpectNearestCellsAreTheTopOfAFullSort(cells, bytes, 2, 2);
+}
+
 TEST(MatchDescriptorsInCells, EveryCellSearchedIsTheExactMatcher) {
   std::mt19937_64 generator(11);
   const FeatureDescriptors bytes1 = GroupedDescriptors(30, 20, 0.3, &generator);

@@ -26,7 +26,7 @@ struct MatchableDescriptors {
   PackedSimilarityColumns packed;
   int NumRows() const { return static_cast<int>(bytes.rows()); }
 };
-MatchableDescriptors PrepareDescriptors(const FeatureDescriptors& descriptors);
+MatchableDescriptors PrepareDescriptors(FeatureDescriptors descriptors);
 
 // Packs the rows for this CPU's similarity kernel, for descriptors that are image 1 of many
 // pairs (exhaustive matching packed each image once per pair: 6 % of its time on templeRing).

@@ -1,6 +1,7 @@
 #include "parallax/pipeline/matching_stage.h"
 
 #include <algorithm>
+#include <cstring>
 #include <optional>
 #include <unordered_map>
 #include <unordered_set>
@@ -102,25 +103,32 @@ std::optional<DescriptorCells> TrainDescriptorCells(const ApproximateMatchingOpt
   std::vector<FeatureDescriptors> parts;
   Eigen::Index num_rows = 0;
   for (size_t k = 0; k < num_images; ++k) {
-    const FeatureDescriptors descriptors =
+    FeatureDescriptors descriptors =
         database.ReadDescriptors(image_ids[k * image_ids.size() / num_images]);
     const size_t stride =
         std::max<size_t>(1, static_cast<size_t>(descriptors.rows()) / rows_per_image);
+    if (stride == 1) {
+      num_rows += descriptors.rows();
+      parts.push_back(std::move(descriptors));
+      continue;
+    }
+    // Rows by memcpy (descriptors are row-major bytes): Eigen's row assignment went byte by
+    // byte, and copying a collection's sample took longer than reading it.
+    const auto dim = static_cast<size_t>(descriptors.cols());
     FeatureDescriptors& part =
         parts.emplace_back((descriptors.rows() + stride - 1) / stride, descriptors.cols());
-    for (Eigen::Index row = 0; row < part.rows(); ++row) {
-      part.row(row) = descriptors.row(row * static_cast<Eigen::Index>(stride));
+    for (size_t row = 0; row < static_cast<size_t>(part.rows()); ++row) {
+      std::memcpy(part.data() + row * dim, descriptors.data() + row * stride * dim, dim);
     }
     num_rows += part.rows();
   }
   if (num_rows == 0) return std::nullopt;
   FeatureDescriptors sample(num_rows, parts.front().cols());
-  Eigen::Index row = 0;
+  uint8_t* out = sample.data();
   for (const FeatureDescriptors& part : parts) {
-    sample.middleRows(row, part.rows()) = part;
-    row += part.rows();
+    out = std::copy_n(part.data(), part.size(), out);
   }
-  return DescriptorCells::Train(sample, options.cells);
+  return DescriptorCells::Train(std::move(sample), options.cells);
 }
 
 }  // namespace
@@ -218,7 +226,9 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
   const Timer cells_timer;
   std::optional<DescriptorCells> cells;
   if (UseApproximateMatching(options, image_ids.size())) {
-    cells = TrainDescriptorCells(options.approximate, image_ids, *database);
+    ApproximateMatchingOptions approximate = options.approximate;
+    approximate.cells.num_threads = options.num_threads;  // Nothing else runs while it trains.
+    cells = TrainDescriptorCells(approximate, image_ids, *database);
   }
   stats.approximate = cells.has_value();
   int num_cell_assignments = 0;
@@ -286,7 +296,7 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
       }
       ParallelFor(0, missing.size(), options.num_threads, [&](size_t m) {
         ImageFeatures& features = cache.at(missing[m]);
-        features.descriptors = PrepareDescriptors(raw_descriptors[m]);
+        features.descriptors = PrepareDescriptors(std::move(raw_descriptors[m]));
         // Exact matching reads an image's rows as image 1 of each of its pairs: packed once.
         if (!cells) PackRows(&features.descriptors);
         if (stats.preemptive) {
