@@ -156,8 +156,9 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
            options->approximate.mode = *ApproximateMatchingModeFromName(name);
          },
          "Compare each descriptor only with the other image's descriptors in its cells of a "
-         "coarse k-means partition: auto (on where the pairs come from retrieval or GPS), on "
-         "or off (see docs/pair-selection.md)")
+         "coarse k-means partition: auto (on where the pairs come from retrieval or GPS, or "
+         "where images have 512 descriptors or more on average, as COLMAP 4's CPU matcher), "
+         "on or off (see docs/pair-selection.md)")
       ->default_str("auto")
       ->check(CLI::IsMember({"auto", "on", "off"}));
   app.add_option("--matching-cells", options->approximate.cells.num_cells,

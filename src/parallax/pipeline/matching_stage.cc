@@ -74,10 +74,15 @@ MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
   return largest;
 }
 
-// Whether approximate matching applies: `auto` turns it on where the pairs come from
-// retrieval or GPS, which is also where every rank of a distributed run can tell without the
-// coordinator's pair selection.
-bool UseApproximateMatching(const MatchingStageOptions& options, size_t num_images) {
+// Whether approximate matching applies. `auto` turns it on where the pairs come from
+// retrieval or GPS, and where the images have kMinMeanDescriptorsForCells descriptors or more
+// on average: COLMAP 4 matches on the CPU through an inverted file (FAISS's IVF, 4 of
+// 4 sqrt(n) lists probed) wherever the searched image has 512 or more, exhaustive matching
+// included. Every rank of a distributed run reads the same counts, so all decide alike.
+constexpr double kMinMeanDescriptorsForCells = 512;
+
+bool UseApproximateMatching(const MatchingStageOptions& options,
+                            const std::vector<image_t>& image_ids, const Database& database) {
   switch (options.approximate.mode) {
     case ApproximateMatchingOptions::Mode::kOn:
       return true;
@@ -86,8 +91,12 @@ bool UseApproximateMatching(const MatchingStageOptions& options, size_t num_imag
     case ApproximateMatchingOptions::Mode::kAuto:
       break;
   }
-  const PairMode mode = ResolvedPairMode(options.pairs, num_images);
-  return mode == PairMode::kRetrieval || mode == PairMode::kSpatial;
+  const PairMode mode = ResolvedPairMode(options.pairs, image_ids.size());
+  if (mode == PairMode::kRetrieval || mode == PairMode::kSpatial) return true;
+  if (image_ids.empty()) return false;
+  double num_descriptors = 0;
+  for (const image_t image_id : image_ids) num_descriptors += database.NumKeypoints(image_id);
+  return num_descriptors >= kMinMeanDescriptorsForCells * static_cast<double>(image_ids.size());
 }
 
 // The cells, trained on an even share of the rows of up to max_training_images images spread
@@ -225,7 +234,7 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
   // pairs are matched as an uninterrupted run matches them.
   const Timer cells_timer;
   std::optional<DescriptorCells> cells;
-  if (UseApproximateMatching(options, image_ids.size())) {
+  if (UseApproximateMatching(options, image_ids, *database)) {
     ApproximateMatchingOptions approximate = options.approximate;
     approximate.cells.num_threads = options.num_threads;  // Nothing else runs while it trains.
     cells = TrainDescriptorCells(approximate, image_ids, *database);

@@ -35,7 +35,7 @@ struct PreemptiveMatchingOptions {
 // coarse k-means partition, instead of all of them.
 struct ApproximateMatchingOptions {
   enum class Mode {
-    kAuto,  // On where the pairs come from retrieval or GPS (large collections), else off.
+    kAuto,  // On for retrieval or GPS pairs, and for images of 512 or more descriptors.
     kOn,
     kOff,
   };

@@ -112,7 +112,8 @@ TEST_F(FeatureMatchingTest, ExhaustiveMatchesAndVerifiesEveryPair) {
   MatchingStageOptions options;
   options.num_threads = 2;
   const MatchingStageResult stats = RunMatchingStage(options, &database);
-  EXPECT_FALSE(stats.approximate);  // auto: exhaustive pairs are matched exactly.
+  // auto: 210 descriptors per image, under the 512 from which cells are used.
+  EXPECT_FALSE(stats.approximate);
   EXPECT_EQ(stats.num_pairs, 6u);
   EXPECT_EQ(stats.num_matched, 6u);
   EXPECT_EQ(stats.num_skipped, 0u);
@@ -252,6 +253,27 @@ TEST_F(FeatureMatchingTest, PreemptiveTestStopsUnrelatedPairsOnly) {
   const MatchingStageResult again = RunMatchingStage(options, &database);
   EXPECT_EQ(again.num_skipped, 15u);
   EXPECT_EQ(again.num_matched, 0u);
+}
+
+// `auto` on exhaustive pairs: cells from 512 descriptors per image on average (COLMAP 4's
+// rule), exact below.
+TEST_F(FeatureMatchingTest, AutoMatchesInCellsFromFiveHundredTwelveDescriptorsPerImage) {
+  Database database(dir_ / "database.db");
+  MakeScene(&database, 3, 500, 20);  // 520 descriptors per image.
+  MatchingStageOptions options;
+  options.num_threads = 2;
+  const MatchingStageResult stats = RunMatchingStage(options, &database);
+  EXPECT_TRUE(stats.approximate);
+  EXPECT_EQ(stats.num_verified, 3u);
+  for (const PairMatchStats& pair : stats.pairs) {
+    for (const FeatureMatch& match : database.ReadMatches(pair.image_id1, pair.image_id2)) {
+      EXPECT_TRUE(IsCorrect(pair.image_id1, pair.image_id2, match));
+    }
+  }
+
+  Database smaller(dir_ / "smaller.db");
+  MakeScene(&smaller, 3, 480, 20);  // 500.
+  EXPECT_FALSE(RunMatchingStage(options, &smaller).approximate);
 }
 
 TEST_F(FeatureMatchingTest, ApproximateMatchingFindsEveryPointInItsCell) {
