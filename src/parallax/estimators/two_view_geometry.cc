@@ -263,6 +263,14 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
   const bool calibrated = options.use_essential_when_calibrated && camera1.has_prior_focal_length &&
                           camera2.has_prior_focal_length && camera1.VerifyParams() &&
                           camera2.VerifyParams();
+  // E's RANSAC stops once its models fall far short of the significance test below
+  // (SignificantInlierCount). Only E's: a calibrated epipolar model's chance rate varies
+  // little from model to model, while F's seven degrees of freedom (and H's eight) let a
+  // chance model take in a cluster of keypoints, and bounding their searches by such a
+  // model's rate lost weak real pairs (16 true inliers of 30 matches).
+  const uint64_t chance_seed = DeriveSeed(options.ransac.random_seed, 0);
+  const double max_log10_num_false_alarms = std::log10(options.max_num_false_alarms);
+
   // E first when the intrinsics are known: it is the model sought, and its 5-point samples
   // find a given inlier ratio in far fewer trials than F's 7-point ones.
   RansacReport<Eigen::Matrix3d> E_report;
@@ -279,7 +287,10 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
                          camera2.CamFromImgThreshold(max_error_px));
     const LoRansac<EssentialMatrixFivePointEstimator, EssentialMatrixEightPointEstimator> E_ransac(
         bounded_options(E_max_error, kEssentialStream, static_cast<double>(min_num_inliers)));
-    E_report = E_ransac.Estimate(normalized1, normalized2);
+    E_report = E_ransac.Estimate(
+        normalized1, normalized2,
+        SignificantInlierCount<EssentialMatrixFivePointEstimator>(
+            normalized1, normalized2, E_max_error, chance_seed, max_log10_num_false_alarms));
   }
   const size_t E_num_inliers = E_report.success ? E_report.num_inliers : 0;
 
@@ -368,7 +379,6 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
 
   // Chance matches: RANSAC always finds some model that explains a few of them, more the more
   // matches there are. Keep the pair only when so many inliers would be unexpected.
-  const uint64_t chance_seed = DeriveSeed(options.ransac.random_seed, 0);
   double log10_num_false_alarms = 0.0;
   if (chosen == &E_report) {
     log10_num_false_alarms =
@@ -383,7 +393,7 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
         Log10NumFalseAlarms(HomographyMatrixEstimator(), matched1, matched2, H_report.model,
                             max_error_px, num_inliers, chance_seed);
   }
-  if (log10_num_false_alarms > std::log10(options.max_num_false_alarms)) {
+  if (log10_num_false_alarms > max_log10_num_false_alarms) {
     PARALLAX_LOG(Debug) << "Two-view inliers (" << num_inliers << " of " << num_valid
                         << ") could be chance: 10^" << log10_num_false_alarms
                         << " false alarms expected; degenerate pair";

@@ -71,6 +71,57 @@ double Log10NumFalseAlarms(const Estimator& estimator, const std::vector<Eigen::
   return Log10NumFalseAlarmsFromChance(n, s, num_inliers, p, kMaxModelsPerSample<Estimator>);
 }
 
+// The fewest inliers with which a model would pass the significance test, log10(NFA) <=
+// max_log10_num_false_alarms, at the chance rate p of a given model: RANSAC's inliers_sought
+// in two-view verification, so that on a pair whose matches are chance it stops once the
+// models it finds are far from significant, instead of proving to its confidence that no
+// model has min_num_inliers (on templeRing such pairs, two thirds of the exhaustive ones,
+// took most of verification's time). The re-pairing is drawn once, with the seed of the
+// final test, so p is the one that test measures for the same model. Returns 0 for a model
+// that is significant already, n + 1 when no count of inliers would make it so.
+template <typename Estimator>
+class SignificantInlierCount {
+ public:
+  SignificantInlierCount(const std::vector<Eigen::Vector2d>& points1,
+                         const std::vector<Eigen::Vector2d>& points2, double max_error,
+                         uint64_t seed, double max_log10_num_false_alarms)
+      : n_(points1.size()),
+        max_squared_error_(max_error * max_error),
+        max_log10_num_false_alarms_(max_log10_num_false_alarms) {
+    ChancePairs(points1, points2, seed, &chance1_, &chance2_);
+  }
+
+  size_t operator()(const Eigen::Matrix3d& model, size_t num_inliers) const {
+    constexpr size_t s = Estimator::kMinNumSamples;
+    if (n_ <= s || chance1_.empty()) return 0;
+    Estimator().Residuals(chance1_, chance2_, model, &residuals_);
+    size_t num_chance_inliers = 0;
+    for (const double residual : residuals_) num_chance_inliers += residual <= max_squared_error_;
+    const double p =
+        static_cast<double>(num_chance_inliers + 1) / static_cast<double>(residuals_.size() + 1);
+    const auto significant = [&](size_t k) {
+      return Log10NumFalseAlarmsFromChance(n_, s, k, p, kMaxModelsPerSample<Estimator>) <=
+             max_log10_num_false_alarms_;
+    };
+    if (significant(num_inliers)) return 0;
+    if (!significant(n_)) return n_ + 1;
+    // The number of false alarms falls as the inliers grow: the first significant count.
+    size_t low = num_inliers, high = n_;  // significant(high), !significant(low).
+    while (high - low > 1) {
+      const size_t middle = low + (high - low) / 2;
+      (significant(middle) ? high : low) = middle;
+    }
+    return high;
+  }
+
+ private:
+  size_t n_;
+  double max_squared_error_;
+  double max_log10_num_false_alarms_;
+  std::vector<Eigen::Vector2d> chance1_, chance2_;
+  mutable std::vector<double> residuals_;
+};
+
 // True when the masked points spread less than `tolerance` across their principal line (or
 // all coincide): no two-view model is determined by them.
 bool AreNearlyCollinear(const std::vector<Eigen::Vector2d>& points, const std::vector<char>& mask,

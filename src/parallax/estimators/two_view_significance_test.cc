@@ -4,6 +4,10 @@
 
 #include <cmath>
 
+#include "parallax/geometry/essential_matrix.h"
+#include "parallax/geometry/rigid3.h"
+#include "parallax/math/random.h"
+
 namespace parallax {
 namespace {
 
@@ -49,6 +53,50 @@ TEST(TwoViewSignificance, ChancePairsAreAllPairsWhenFewAndSeededWhenMany) {
   ChancePairs(points1, points2, 2, &other1, &other2);
   EXPECT_EQ(again1, chance1);
   EXPECT_NE(other1, chance1);
+}
+
+// SignificantInlierCount against a scan of the final test itself (Log10NumFalseAlarms, the
+// same re-pairing seed): the first count of inliers that passes, 0 when the count given
+// passes already, n + 1 when none would.
+TEST(TwoViewSignificance, SignificantInlierCountIsTheFirstCountTheTestPasses) {
+  SetPRNGSeed(5);
+  const Rigid3d cam2_from_cam1(Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY())),
+                               Eigen::Vector3d(1, 0.1, 0.05));
+  const Eigen::Matrix3d E = EssentialFromPose(cam2_from_cam1);
+  const EssentialMatrixFivePointEstimator estimator;
+  const uint64_t seed = 9;
+  bool saw_passing = false, saw_count = false, saw_none = false;
+  for (const int n : {30, 60, 120}) {
+    // Unrelated keypoints: what a pair that does not overlap matches.
+    std::vector<Eigen::Vector2d> points1, points2;
+    for (int i = 0; i < n; ++i) {
+      points1.emplace_back(RandomUniformReal(-0.5, 0.5), RandomUniformReal(-0.4, 0.4));
+      points2.emplace_back(RandomUniformReal(-0.5, 0.5), RandomUniformReal(-0.4, 0.4));
+    }
+    for (const double max_error : {0.002, 0.02, 0.2}) {
+      const SignificantInlierCount<EssentialMatrixFivePointEstimator> count(
+          points1, points2, max_error, seed, /*max_log10_num_false_alarms=*/0.0);
+      const auto passes = [&](size_t k) {
+        return Log10NumFalseAlarms(estimator, points1, points2, E, max_error, k, seed) <= 0.0;
+      };
+      size_t first = static_cast<size_t>(n) + 1;
+      for (size_t k = 0; k <= static_cast<size_t>(n); ++k) {
+        if (passes(k)) {
+          first = k;
+          break;
+        }
+      }
+      for (const size_t num_inliers : {size_t{3}, size_t{10}, size_t{20}}) {
+        const size_t expected = passes(num_inliers) ? 0 : first;
+        saw_passing |= expected == 0;
+        saw_none |= expected == static_cast<size_t>(n) + 1;
+        saw_count |= expected > num_inliers && expected <= static_cast<size_t>(n);
+        EXPECT_EQ(count(E, num_inliers), expected)
+            << n << " matches, error " << max_error << ", " << num_inliers << " inliers";
+      }
+    }
+  }
+  EXPECT_TRUE(saw_passing && saw_count && saw_none);  // Every case was exercised.
 }
 
 TEST(TwoViewSignificance, CollinearAndRepeatedInliersAreDegenerate) {

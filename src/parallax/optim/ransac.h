@@ -104,6 +104,18 @@ class LoRansac {
   }
 
   Report Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y) const {
+    return Estimate(X, Y, [](const M_t&, size_t) { return size_t{0}; });
+  }
+
+  // As above, with `inliers_sought(model, num_inliers)`: the fewest inliers a model like
+  // this new best one would need to matter to the caller (two-view verification: the count
+  // its significance test needs at this model's chance rate). While the best model has fewer,
+  // the trials are bounded by the ratio of that count, with min_inlier_ratio's multiplier, as
+  // min_inlier_ratio bounds them: RANSAC stops searching for models the caller would reject
+  // anyway, instead of proving to `confidence` that no such model exists.
+  template <typename InliersSought>
+  Report Estimate(const std::vector<X_t>& X, const std::vector<Y_t>& Y,
+                  const InliersSought& inliers_sought) const {
     PARALLAX_CHECK_EQ(X.size(), Y.size());
     Report report;
     const size_t num_samples = X.size();
@@ -146,9 +158,16 @@ class LoRansac {
         if (options_.local_optimization_iterations > 0) {
           LocalOptimize(X, Y, max_squared_error, &best, &best_model, &residuals);
         }
-        const size_t needed =
+        size_t needed =
             ComputeNumRansacTrials(best.num_inliers, num_samples, kSampleSize, options_.confidence,
                                    options_.dynamic_num_trials_multiplier);
+        const size_t sought = inliers_sought(best_model, best.num_inliers);
+        if (best.num_inliers < sought) {
+          needed =
+              std::min(needed, ComputeNumRansacTrials(std::min(sought, num_samples), num_samples,
+                                                      kSampleSize, options_.confidence,
+                                                      options_.min_inlier_ratio_trials_multiplier));
+        }
         max_trials = std::max<size_t>(std::min(max_trials, needed), options_.min_num_trials);
       }
     }

@@ -106,6 +106,66 @@ TEST(LoRansac, TheSeedAloneDecidesTheSamples) {
             std::vector<std::vector<double>>(first.begin(), first.begin() + 20));
 }
 
+// Points with no line among them: RANSAC searches to its min_inlier_ratio bound. A caller
+// that would reject every model short of some count bounds the search by that count.
+TEST(LoRansac, InliersSoughtBoundsTheSearchForModelsThatFallShort) {
+  SetPRNGSeed(3);
+  std::vector<double> X, Y;
+  for (int i = 0; i < 200; ++i) {
+    X.push_back(RandomUniformReal(-10, 10));
+    Y.push_back(RandomUniformReal(-10, 10));
+  }
+  RansacOptions options;
+  options.max_error = 0.05;
+  options.min_inlier_ratio = 0.02;
+  options.min_inlier_ratio_trials_multiplier = 1.0;
+  options.max_num_trials = 100000;
+  const LoRansac<LineEstimator> ransac(options);
+  const auto plain = ransac.Estimate(X, Y);
+  // Sought 0: the caller would keep any model; the same run, trial for trial.
+  const auto keep_any = ransac.Estimate(X, Y, [](const Eigen::Vector2d&, size_t) { return 0; });
+  EXPECT_EQ(keep_any.num_trials, plain.num_trials);
+  EXPECT_EQ(keep_any.model, plain.model);
+  EXPECT_EQ(keep_any.inlier_mask, plain.inlier_mask);
+
+  // 100 of 200 sought: a sample of two inliers at ratio 0.5 is found to the confidence in
+  // log(1 - c) / log(1 - 0.25) trials, 33 at c = 0.9999 (the bound starts at the first
+  // best model, so a few more may be drawn before it).
+  size_t calls = 0;
+  const auto bounded = ransac.Estimate(X, Y, [&calls](const Eigen::Vector2d&, size_t num_inliers) {
+    ++calls;
+    EXPECT_LT(num_inliers, 100u);
+    return 100;
+  });
+  const size_t half_ratio_trials = ComputeNumRansacTrials(100, 200, 2, options.confidence, 1.0);
+  EXPECT_EQ(half_ratio_trials, 33u);
+  EXPECT_GT(calls, 0u);
+  EXPECT_LE(bounded.num_trials, half_ratio_trials + 5);
+  EXPECT_GT(plain.num_trials, 10 * half_ratio_trials);
+  // The best model found in those trials is still reported.
+  EXPECT_TRUE(bounded.success);
+}
+
+// A model with as many inliers as sought: the caller keeps it, and the search is RANSAC's own.
+TEST(LoRansac, InliersSoughtDoesNotStopASearchThatFoundEnough) {
+  SetPRNGSeed(7);
+  std::vector<double> X, Y;
+  for (int i = 0; i < 200; ++i) {
+    const double x = RandomUniformReal(-10, 10);
+    X.push_back(x);
+    Y.push_back(i % 4 == 0 ? 3 * x + 2 : RandomUniformReal(-30, 30));  // A quarter inliers.
+  }
+  RansacOptions options;
+  options.max_error = 0.05;
+  const LoRansac<LineEstimator> ransac(options);
+  const auto plain = ransac.Estimate(X, Y);
+  const auto sought = ransac.Estimate(X, Y, [](const Eigen::Vector2d&, size_t) { return 40; });
+  ASSERT_TRUE(plain.success);
+  EXPECT_EQ(sought.num_trials, plain.num_trials);
+  EXPECT_EQ(sought.num_inliers, plain.num_inliers);
+  EXPECT_EQ(sought.num_inliers, 50u);
+}
+
 TEST(LoRansac, TooFewPointsFails) {
   LoRansac<LineEstimator> ransac(RansacOptions{});
   const auto report = ransac.Estimate({1.0}, {2.0});
