@@ -17,8 +17,8 @@ struct TwoViewGeometryOptions {
   // its bound; each model's search is raised further to the fewest inliers that could change
   // the outcome (min_num_inliers, and the E/F and H/F ratios below), so chance matches are
   // rejected in few trials; E's, also to the fewest that would pass the significance test at
-  // the chance rate of its best model so far (SignificantInlierCount). The seed is the pair's: matching derives it from --seed and the
-  // pair, and each model's RANSAC derives its own from it.
+  // the chance rate of its best model so far (SignificantInlierCount). The seed is the pair's:
+  // matching derives it from --seed and the pair, and each model's RANSAC derives its own from it.
   // Confidence 0.999 (COLMAP's) and at most 5,000 trials per model: pairs that overlap stop
   // long before (their inlier ratio is high), so the cap binds on pairs that fail with many
   // chance matches, two in five of the pairs retrieval proposes on a survey; at 0.9999 and
