@@ -40,6 +40,20 @@ void ChancePairs(const std::vector<Eigen::Vector2d>& points1,
 double Log10NumFalseAlarmsFromChance(size_t n, size_t sample_size, size_t num_inliers, double p,
                                      int models_per_sample);
 
+// The chance p that an unrelated match is an inlier of `model`: the share of the re-paired
+// matches (ChancePairs) within max_error, with one inlier more than seen, so that a finite
+// sample never gives p = 0. `residuals` is scratch space.
+template <typename Estimator>
+double ChanceInlierRate(const Estimator& estimator, const std::vector<Eigen::Vector2d>& chance1,
+                        const std::vector<Eigen::Vector2d>& chance2, const Eigen::Matrix3d& model,
+                        double max_error, std::vector<double>* residuals) {
+  estimator.Residuals(chance1, chance2, model, residuals);
+  const double max_squared_error = max_error * max_error;
+  size_t num_chance_inliers = 0;
+  for (const double residual : *residuals) num_chance_inliers += residual <= max_squared_error;
+  return static_cast<double>(num_chance_inliers + 1) / static_cast<double>(residuals->size() + 1);
+}
+
 // The a-contrario number of false alarms of a model with `num_inliers` of the n matches
 // (Moisan & Stival, "A probabilistic criterion to detect rigid point matches between two
 // images and estimate the fundamental matrix", IJCV 2004): the expected number of models,
@@ -59,15 +73,8 @@ double Log10NumFalseAlarms(const Estimator& estimator, const std::vector<Eigen::
   if (num_inliers <= s || n <= s) return std::numeric_limits<double>::infinity();
   std::vector<Eigen::Vector2d> chance1, chance2;
   ChancePairs(points1, points2, seed, &chance1, &chance2);
-  std::vector<double> squared_residuals;
-  estimator.Residuals(chance1, chance2, model, &squared_residuals);
-  const double max_squared_error = max_error * max_error;
-  size_t num_chance_inliers = 0;
-  for (const double residual : squared_residuals)
-    num_chance_inliers += residual <= max_squared_error;
-  // One more inlier than seen: never p = 0 from a finite sample.
-  const double p = static_cast<double>(num_chance_inliers + 1) /
-                   static_cast<double>(squared_residuals.size() + 1);
+  std::vector<double> residuals;
+  const double p = ChanceInlierRate(estimator, chance1, chance2, model, max_error, &residuals);
   return Log10NumFalseAlarmsFromChance(n, s, num_inliers, p, kMaxModelsPerSample<Estimator>);
 }
 
@@ -86,7 +93,7 @@ class SignificantInlierCount {
                          const std::vector<Eigen::Vector2d>& points2, double max_error,
                          uint64_t seed, double max_log10_num_false_alarms)
       : n_(points1.size()),
-        max_squared_error_(max_error * max_error),
+        max_error_(max_error),
         max_log10_num_false_alarms_(max_log10_num_false_alarms) {
     ChancePairs(points1, points2, seed, &chance1_, &chance2_);
   }
@@ -94,11 +101,8 @@ class SignificantInlierCount {
   size_t operator()(const Eigen::Matrix3d& model, size_t num_inliers) const {
     constexpr size_t s = Estimator::kMinNumSamples;
     if (n_ <= s || chance1_.empty()) return 0;
-    Estimator().Residuals(chance1_, chance2_, model, &residuals_);
-    size_t num_chance_inliers = 0;
-    for (const double residual : residuals_) num_chance_inliers += residual <= max_squared_error_;
     const double p =
-        static_cast<double>(num_chance_inliers + 1) / static_cast<double>(residuals_.size() + 1);
+        ChanceInlierRate(Estimator(), chance1_, chance2_, model, max_error_, &residuals_);
     const auto significant = [&](size_t k) {
       return Log10NumFalseAlarmsFromChance(n_, s, k, p, kMaxModelsPerSample<Estimator>) <=
              max_log10_num_false_alarms_;
@@ -116,7 +120,7 @@ class SignificantInlierCount {
 
  private:
   size_t n_;
-  double max_squared_error_;
+  double max_error_;
   double max_log10_num_false_alarms_;
   std::vector<Eigen::Vector2d> chance1_, chance2_;
   mutable std::vector<double> residuals_;
