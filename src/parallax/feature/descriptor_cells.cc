@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <numeric>
 #include <random>
@@ -105,12 +104,8 @@ DescriptorCells DescriptorCells::Train(FeatureDescriptors sample,
   // this kind of machine, in first touches of its memory, than the k-means steps).
   MatchableDescriptors rows;
   if (num_training < num_rows) {
-    const auto row_bytes = static_cast<size_t>(dim);
-    FeatureDescriptors training(num_training, dim);
-    for (int i = 0; i < num_training; ++i) {
-      std::memcpy(training.data() + static_cast<size_t>(i) * row_bytes,
-                  sample.data() + static_cast<size_t>(order[i]) * row_bytes, row_bytes);
-    }
+    FeatureDescriptors training;
+    GatherDescriptorRows(sample, order, &training);
     std::iota(order.begin(), order.end(), 0);
     rows = PrepareDescriptors(std::move(training));
   } else {

@@ -21,8 +21,8 @@ struct DescriptorCellsOptions {
   int max_training_descriptors = 100000;
   int kmeans_iterations = 10;
   uint64_t seed = 0;  // The training sample and the first centroids.
-  int num_threads =
-      1;  // Training's assignment steps; -1: all cores. The cells do not depend on it.
+  // Threads of training's assignment steps (-1: all cores); the cells do not depend on it.
+  int num_threads = 1;
   void Check() const;
 };
 

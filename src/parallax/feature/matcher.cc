@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 #if defined(__AVX2__)
@@ -221,13 +220,10 @@ MatchableDescriptors PrepareDescriptors(FeatureDescriptors descriptors) {
 void SelectRows(const MatchableDescriptors& descriptors, const std::vector<int>& rows,
                 MatchableDescriptors* selected) {
   const auto num_rows = static_cast<Eigen::Index>(rows.size());
-  selected->bytes.resize(num_rows, descriptors.bytes.cols());
+  GatherDescriptorRows(descriptors.bytes, rows, &selected->bytes);
   selected->scales.resize(rows.size());
   selected->sums.resize(rows.size());
-  const auto dim = static_cast<size_t>(descriptors.bytes.cols());
   for (Eigen::Index k = 0; k < num_rows; ++k) {
-    std::memcpy(selected->bytes.data() + static_cast<size_t>(k) * dim,
-                descriptors.bytes.data() + static_cast<size_t>(rows[k]) * dim, dim);
     selected->scales[k] = descriptors.scales[rows[k]];
     selected->sums[k] = descriptors.sums[rows[k]];
   }

@@ -1,6 +1,9 @@
 #include "parallax/feature/types.h"
 
 #include <cmath>
+#include <cstring>
+
+#include "parallax/util/check.h"
 
 namespace parallax {
 
@@ -17,5 +20,15 @@ float FeatureKeypoint::ComputeScale() const {
 }
 
 float FeatureKeypoint::ComputeOrientation() const { return std::atan2(a21, a11); }
+
+void GatherDescriptorRows(const FeatureDescriptors& from, const std::vector<int>& rows,
+                          FeatureDescriptors* to) {
+  to->resize(static_cast<Eigen::Index>(rows.size()), from.cols());
+  const auto dim = static_cast<size_t>(from.cols());
+  for (size_t k = 0; k < rows.size(); ++k) {
+    PARALLAX_CHECK(rows[k] >= 0 && rows[k] < from.rows());
+    std::memcpy(to->data() + k * dim, from.data() + static_cast<size_t>(rows[k]) * dim, dim);
+  }
+}
 
 }  // namespace parallax

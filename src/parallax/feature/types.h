@@ -31,6 +31,11 @@ using KeypointColors = std::vector<uint8_t>;
 // One descriptor per row, 128 bytes for SIFT.
 using FeatureDescriptors = Eigen::Matrix<uint8_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+// Rows `rows` of `from`, in that order, into `to` (resized, its memory reused). Row by row
+// with memcpy: Eigen's row assignment copies a byte at a time.
+void GatherDescriptorRows(const FeatureDescriptors& from, const std::vector<int>& rows,
+                          FeatureDescriptors* to);
+
 struct FeatureMatch {
   point2D_t point2D_idx1 = kInvalidPoint2DIdx;
   point2D_t point2D_idx2 = kInvalidPoint2DIdx;

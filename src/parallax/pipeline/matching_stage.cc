@@ -1,7 +1,6 @@
 #include "parallax/pipeline/matching_stage.h"
 
 #include <algorithm>
-#include <cstring>
 #include <optional>
 #include <unordered_map>
 #include <unordered_set>
@@ -121,15 +120,11 @@ std::optional<DescriptorCells> TrainDescriptorCells(const ApproximateMatchingOpt
       parts.push_back(std::move(descriptors));
       continue;
     }
-    // Rows by memcpy (descriptors are row-major bytes): Eigen's row assignment went byte by
-    // byte, and copying a collection's sample took longer than reading it.
-    const auto dim = static_cast<size_t>(descriptors.cols());
-    FeatureDescriptors& part =
-        parts.emplace_back((descriptors.rows() + stride - 1) / stride, descriptors.cols());
-    for (size_t row = 0; row < static_cast<size_t>(part.rows()); ++row) {
-      std::memcpy(part.data() + row * dim, descriptors.data() + row * stride * dim, dim);
-    }
-    num_rows += part.rows();
+    std::vector<int> rows;
+    for (Eigen::Index row = 0; row < descriptors.rows(); row += static_cast<Eigen::Index>(stride))
+      rows.push_back(static_cast<int>(row));
+    GatherDescriptorRows(descriptors, rows, &parts.emplace_back());
+    num_rows += parts.back().rows();
   }
   if (num_rows == 0) return std::nullopt;
   FeatureDescriptors sample(num_rows, parts.front().cols());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <numeric>
 #include <random>
 #include <set>
 #include <tuple>
@@ -42,14 +43,13 @@ VocabularyTree::RowMatrixXf SampleTrainingDescriptors(const std::vector<image_t>
   Eigen::Index num_rows = 0, dimension = 0;
   for (const image_t image_id : image_ids) {
     const FeatureDescriptors descriptors = database.ReadDescriptors(image_id);
-    std::vector<Eigen::Index> rows(static_cast<size_t>(descriptors.rows()));
-    for (size_t i = 0; i < rows.size(); ++i) rows[i] = static_cast<Eigen::Index>(i);
+    std::vector<int> rows(static_cast<size_t>(descriptors.rows()));
+    std::iota(rows.begin(), rows.end(), 0);
     std::shuffle(rows.begin(), rows.end(), engine);
     rows.resize(static_cast<size_t>(std::ceil(share * rows.size())));
     std::sort(rows.begin(), rows.end());
-    FeatureDescriptors sample(static_cast<Eigen::Index>(rows.size()), descriptors.cols());
-    for (size_t i = 0; i < rows.size(); ++i)
-      sample.row(static_cast<Eigen::Index>(i)) = descriptors.row(rows[i]);
+    FeatureDescriptors sample;
+    GatherDescriptorRows(descriptors, rows, &sample);
     parts.push_back(ToUnitRows(sample));
     num_rows += sample.rows();
     dimension = std::max(dimension, sample.cols());
