@@ -14,9 +14,9 @@ std::vector<float> GaussianHalfKernel(double sigma);
 // cv::GaussianBlur(src, dst, Size(), sigma, sigma, BORDER_REPLICATE) does with the same kernel,
 // up to float rounding; a view of a larger image is blurred as an image of its own. SIFT's scale
 // space is mostly this blur; OpenCV's filter engine copies every row into a bordered buffer and
-// sums the horizontal pass without the kernel's symmetry, and took 1.6 times as long. One output
-// row at a time: its vertical pass into a padded row that stays in L1, then the horizontal pass
-// from it. `dst` must not share data with `src`.
+// sums the horizontal pass without the kernel's symmetry, and took 1.6 times as long. Four
+// output rows at a time: their vertical pass into padded rows that stay in L1, then the
+// horizontal pass from each. `dst` must not share data with `src`.
 void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst);
 
 }  // namespace parallax

@@ -31,13 +31,15 @@ TEST(GaussianHalfKernel, IsOpenCvsKernelForFloatImages) {
   }
 }
 
-// Sizes around the 32-sample blocks, and smaller than the kernel (every border replicated).
+// Sizes around the 16- and 32-sample blocks and the steps of four rows, and smaller than the
+// kernel (every border replicated); kernels of 1 and 3 taps too.
 TEST(GaussianBlur, MatchesOpenCvsReplicatedBorderBlur) {
-  const std::vector<cv::Size> sizes = {{640, 480}, {97, 33}, {32, 5}, {31, 64}, {5, 3}, {1, 1}};
+  const std::vector<cv::Size> sizes = {{640, 480}, {97, 33}, {32, 5}, {31, 64},
+                                       {48, 6},    {17, 7},  {5, 3},  {1, 1}};
   uint64_t seed = 1;
   for (const cv::Size& size : sizes) {
     const cv::Mat image = RandomImage(size.width, size.height, seed++);
-    for (const double sigma : {1.23, 1.6, 3.09}) {
+    for (const double sigma : {0.05, 0.3, 1.23, 1.6, 3.09}) {
       cv::Mat expected, blurred;
       cv::GaussianBlur(image, expected, cv::Size(), sigma, sigma, cv::BORDER_REPLICATE);
       GaussianBlur(image, sigma, &blurred);
