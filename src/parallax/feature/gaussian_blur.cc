@@ -110,7 +110,8 @@ std::vector<float> GaussianHalfKernel(double sigma) {
   return half;
 }
 
-void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst) {
+void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst,
+                  const std::function<void(int row)>& row_done) {
   PARALLAX_CHECK(dst != nullptr);
   PARALLAX_CHECK_EQ(src.type(), CV_32F);
   PARALLAX_CHECK(dst->data == nullptr || dst->data != src.data);
@@ -144,6 +145,7 @@ void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst) {
       std::fill(row - radius, row, row[0]);
       std::fill(row + cols, row + cols + radius, row[cols - 1]);
       HorizontalRow(row, half_taps.data(), radius, cols, dst->ptr<float>(r + q));
+      if (row_done) row_done(r + q);
     }
   }
 }

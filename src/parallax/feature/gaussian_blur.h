@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -16,7 +17,10 @@ std::vector<float> GaussianHalfKernel(double sigma);
 // space is mostly this blur; OpenCV's filter engine copies every row into a bordered buffer and
 // sums the horizontal pass without the kernel's symmetry, and took 1.6 times as long. Four
 // output rows at a time: their vertical pass into padded rows that stay in L1, then the
-// horizontal pass from each. `dst` must not share data with `src`.
-void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst);
+// horizontal pass from each. `dst` must not share data with `src`. `row_done`, when given, is
+// called with each row of `dst` once it is written, in order, while the row is still in cache (and
+// the same row of `src`, which the vertical pass has just read).
+void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst,
+                  const std::function<void(int row)>& row_done = nullptr);
 
 }  // namespace parallax

@@ -78,6 +78,23 @@ TEST(GaussianBlur, SpreadsAnImpulseAsTheKernelsOuterProduct) {
   EXPECT_NEAR(cv::sum(blurred)[0], 1.0, 1e-5);
 }
 
+// Rows are reported once each, in order, already holding their final values (37 rows: the
+// last step of four has rows past the end, which are not reported).
+TEST(GaussianBlur, ReportsEachRowInOrderOnceItIsWritten) {
+  const cv::Mat image = RandomImage(50, 37, 11);
+  cv::Mat blurred;
+  std::vector<int> reported;
+  cv::Mat seen(image.size(), CV_32F, cv::Scalar(-1));
+  GaussianBlur(image, 1.6, &blurred, [&](int row) {
+    reported.push_back(row);
+    blurred.row(row).copyTo(seen.row(row));
+  });
+  std::vector<int> expected(image.rows);
+  std::iota(expected.begin(), expected.end(), 0);
+  EXPECT_EQ(reported, expected);
+  EXPECT_EQ(cv::norm(seen, blurred, cv::NORM_INF), 0.0);
+}
+
 TEST(GaussianBlur, RejectsItsInputAsOutputAndOtherTypes) {
   cv::Mat image = RandomImage(20, 10, 3);
   EXPECT_THROW(GaussianBlur(image, 1.6, &image), CheckError);
