@@ -392,6 +392,15 @@ double SchurSolver<ReducedMatrix>::Evaluate(const Parameters& parameters, bool l
   return cost;
 }
 
+// block -= a b^T for 6 x 3 a and b, rows 0-3 apart from rows 4-5: Eigen sums a product of
+// six rows in pairs of doubles (six is no multiple of AVX's four), so the 6 x 6 block took 72
+// vector operations; four rows and two, it takes 48.
+template <typename Block>
+void SubtractPoseProduct(const Matrix63& a, const Matrix63& b, Block&& block) {
+  block.template topRows<4>().noalias() -= a.topRows<4>() * b.transpose();
+  block.template bottomRows<2>().noalias() -= a.bottomRows<2>() * b.transpose();
+}
+
 template <typename ReducedMatrix>
 bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* camera_step,
                                              std::vector<Eigen::Vector3d>* point_step) {
@@ -473,19 +482,16 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
           const int dim_b = camera_dim_[obs_b.camera];
           if (pose_a >= 0 && pose_b >= 0) {
             if (pose_a > pose_b) {
-              s.template Block<6, 6>(pose_a, pose_b).noalias() -=
-                  y_pose[a] * w_pose[bi].transpose();
+              SubtractPoseProduct(y_pose[a], w_pose[bi], s.template Block<6, 6>(pose_a, pose_b));
             } else if (pose_a < pose_b) {
-              s.template Block<6, 6>(pose_b, pose_a).noalias() -=
-                  w_pose[bi] * y_pose[a].transpose();
+              SubtractPoseProduct(w_pose[bi], y_pose[a], s.template Block<6, 6>(pose_b, pose_a));
             } else {
               // The diagonal block; (a, b) and (b, a) both land here only if one image
               // observed the point twice.
-              s.template Block<6, 6>(pose_a, pose_a).noalias() -=
-                  y_pose[a] * w_pose[bi].transpose();
-              if (bi != a)
-                s.template Block<6, 6>(pose_a, pose_a).noalias() -=
-                    w_pose[bi] * y_pose[a].transpose();
+              SubtractPoseProduct(y_pose[a], w_pose[bi], s.template Block<6, 6>(pose_a, pose_a));
+              if (bi != a) {
+                SubtractPoseProduct(w_pose[bi], y_pose[a], s.template Block<6, 6>(pose_a, pose_a));
+              }
             }
           }
           if (camera_a >= 0 && camera_b >= 0 && shared_camera < 0) {
