@@ -9,11 +9,13 @@
 
 #include <ctime>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
 #include "parallax/feature/gaussian_blur.h"
 #include "parallax/feature/sift.h"
+#include "parallax/image/image_codecs.h"
 #include "parallax/image/image_reader.h"
 #include "parallax/util/file.h"
 #include "parallax/util/timer.h"
@@ -118,6 +120,38 @@ BENCHMARK(BM_GaussianBlur)
     ->Args({309, 1280})
     ->Args({309, 256})
     ->Unit(benchmark::kMillisecond);
+
+// Decoding templeRing's photos (640x480 RGB PNG files, read into memory beforehand) as the
+// features stage decodes them: arg 0 DecodeImage (libdeflate, image/common_png.h), 1 OpenCV's
+// imdecode (libpng and zlib, what DecodeImage used before).
+void BM_DecodePng(benchmark::State& state) {
+  static const std::vector<std::string> files = [] {
+    std::vector<std::string> bytes;
+    const std::filesystem::path dir = DataRoot() / "templeRing" / "images";
+    if (!std::filesystem::is_directory(dir)) return bytes;
+    for (const auto& path : ListImageFiles(dir)) {
+      if (bytes.size() == 8) break;
+      bytes.push_back(ReadFileToString(path));
+    }
+    return bytes;
+  }();
+  if (files.empty()) {
+    state.SkipWithError("data set missing");
+    return;
+  }
+  size_t index = 0;
+  for (auto _ : state) {
+    const std::string& bytes = files[index++ % files.size()];
+    const cv::Mat image =
+        state.range(0) == 0
+            ? DecodeImage(bytes, ImageFormat::kPng)
+            : cv::imdecode(std::vector<uchar>(bytes.begin(), bytes.end()), cv::IMREAD_UNCHANGED);
+    benchmark::DoNotOptimize(image.data);
+  }
+  state.SetLabel(state.range(0) == 0 ? "DecodeImage" : "cv::imdecode");
+}
+
+BENCHMARK(BM_DecodePng)->ArgName("opencv")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace parallax

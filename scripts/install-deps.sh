@@ -9,7 +9,7 @@ packages=(
   libopencv-core-dev libopencv-imgcodecs-dev libopencv-imgproc-dev
   libopencv-features2d-dev libopencv-calib3d-dev
   libjpeg62-turbo-dev libpng-dev libtiff-dev
-  libcli11-dev nlohmann-json3-dev libxxhash-dev
+  libcli11-dev nlohmann-json3-dev libxxhash-dev libdeflate-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium
   clang-format-14

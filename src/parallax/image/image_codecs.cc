@@ -13,12 +13,14 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
 
+#include "parallax/image/common_png.h"
 #include "parallax/util/byte_order.h"
 
 namespace parallax {
@@ -102,6 +104,7 @@ void PngRead(png_structp png, png_bytep out, png_size_t length) {
 }
 
 cv::Mat DecodePng(std::string_view bytes) {
+  if (std::optional<cv::Mat> image = DecodeCommonPng(bytes)) return std::move(*image);
   PngReader reader{bytes};
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &reader, PngError, PngWarning);
   if (png == nullptr) Throw("cannot create a PNG reader");
