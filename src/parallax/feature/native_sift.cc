@@ -66,7 +66,8 @@ struct NativeSiftScaleSpace {
   std::vector<double> increments;  // Blur from layer k - 1 to layer k.
   double first_blur = 0;           // Blur from the base image to the first layer.
   std::vector<Octave> octaves;
-  // Three rows of one difference of Gaussians, where the extrema screen reads them.
+  // Three rows of one difference of Gaussians and of their RowExtremes, where the extrema
+  // screen reads them.
   std::vector<float> dog_rows;
   cv::Mat magnitude_buffer, angle_buffer;
   cv::Mat dx_rows, dy_rows;    // A band of rows of differences, converted to polar at once.
@@ -302,29 +303,41 @@ bool IsExtremumAcrossScales(const Differences& dogs, int layer, int r, int c) {
   return !beaten_in(layer - 1) && !beaten_in(layer + 1);
 }
 
+// Ternaries, not std::max/min, which the compiler does not turn into vector max/min.
+inline float Max2(float a, float b) { return a > b ? a : b; }
+inline float Min2(float a, float b) { return a < b ? a : b; }
+
+// The largest and smallest of each sample and its two neighbours along a row of a difference
+// (columns 1 to cols - 2): the screens of the row above, the row itself and the row below
+// share them.
+void RowExtremes(const float* __restrict row, int cols, float* __restrict largest,
+                 float* __restrict smallest) {
+  for (int c = 1; c + 1 < cols; ++c) {
+    largest[c] = Max2(Max2(row[c - 1], row[c]), row[c + 1]);
+    smallest[c] = Min2(Min2(row[c - 1], row[c]), row[c + 1]);
+  }
+}
+
 // candidates[c] = 1 where sample (r, c) passes the contrast screen and is an extremum of the
 // 3 x 3 samples around it in its own layer: the cheap tests, in a loop without branches that
 // the compiler vectorises, so that IsExtremumAcrossScales sees a few samples of each row
-// instead of all. Takes the difference's rows r - 1, r and r + 1.
-void ScreenRow(const float* __restrict above, const float* __restrict row,
-               const float* __restrict below, int cols, float screen,
+// instead of all. Takes row r and the RowExtremes of rows r - 1, r and r + 1: a sample is at
+// least its eight neighbours exactly when it is at least the largest of those three (its own
+// row's include itself), two comparisons where the eight took seven.
+void ScreenRow(const float* __restrict row, const float* __restrict largest_above,
+               const float* __restrict largest_at, const float* __restrict largest_below,
+               const float* __restrict smallest_above, const float* __restrict smallest_at,
+               const float* __restrict smallest_below, int cols, float screen,
                std::vector<uint8_t>* candidates) {
   candidates->assign(cols, 0);
   uint8_t* __restrict out = candidates->data();
-  // Ternaries, not std::max/min, which the compiler does not turn into vector max/min.
-  const auto max2 = [](float a, float b) { return a > b ? a : b; };
-  const auto min2 = [](float a, float b) { return a < b ? a : b; };
   for (int c = 1; c + 1 < cols; ++c) {
     const float v = row[c];
-    const float neighbours_max =
-        max2(max2(max2(above[c - 1], above[c]), max2(above[c + 1], row[c - 1])),
-             max2(max2(row[c + 1], below[c - 1]), max2(below[c], below[c + 1])));
-    const float neighbours_min =
-        min2(min2(min2(above[c - 1], above[c]), min2(above[c + 1], row[c - 1])),
-             min2(min2(row[c + 1], below[c - 1]), min2(below[c], below[c + 1])));
+    const float around_max = Max2(Max2(largest_above[c], largest_at[c]), largest_below[c]);
+    const float around_min = Min2(Min2(smallest_above[c], smallest_at[c]), smallest_below[c]);
     // Bitwise, not logical, operators: no branch, so the loop vectorises.
-    const int maximum = static_cast<int>(v > screen) & static_cast<int>(v >= neighbours_max);
-    const int minimum = static_cast<int>(v < -screen) & static_cast<int>(v <= neighbours_min);
+    const int maximum = static_cast<int>(v > screen) & static_cast<int>(v >= around_max);
+    const int minimum = static_cast<int>(v < -screen) & static_cast<int>(v <= around_min);
     out[c] = static_cast<uint8_t>(maximum | minimum);
   }
 }
@@ -345,17 +358,21 @@ class DogScreen {
   DogScreen(const std::vector<cv::Mat>& gaussians, int num_octave_layers, float screen,
             ScaleSpace* space)
       : dogs_(gaussians), num_octave_layers_(num_octave_layers), screen_(screen), space_(space) {
-    space_->dog_rows.resize(3 * static_cast<size_t>(dogs_.cols()));
+    space_->dog_rows.resize(3 * kRingRows * static_cast<size_t>(dogs_.cols()));
   }
 
   void LayerRowDone(int layer, int r) {
     const int dog = layer - 1;
     if (dog < 1 || dog > num_octave_layers_) return;
     const int rows = dogs_.rows(), cols = dogs_.cols();
-    dogs_.Row(dog, r, RingRow(r));
+    dogs_.Row(dog, r, RingRow(kDifference, r));
+    RowExtremes(RingRow(kDifference, r), cols, RingRow(kLargest, r), RingRow(kSmallest, r));
     const int centre = r - 1;
     if (centre < kImageBorder || centre >= rows - kImageBorder) return;
-    ScreenRow(RingRow(centre - 1), RingRow(centre), RingRow(centre + 1), cols, screen_, &flags_);
+    ScreenRow(RingRow(kDifference, centre), RingRow(kLargest, centre - 1),
+              RingRow(kLargest, centre), RingRow(kLargest, centre + 1),
+              RingRow(kSmallest, centre - 1), RingRow(kSmallest, centre),
+              RingRow(kSmallest, centre + 1), cols, screen_, &flags_);
     for (int c = kImageBorder; c < cols - kImageBorder; ++c) {
       // Most samples fail the screen: skip them eight at a time.
       if (c + 8 <= cols - kImageBorder) {
@@ -374,8 +391,12 @@ class DogScreen {
   const std::vector<ScreenedSample>& samples() const { return samples_; }
 
  private:
-  // The difference's row r, in a ring of three rows.
-  float* RingRow(int r) { return space_->dog_rows.data() + (r % 3) * dogs_.cols(); }
+  // Row r of the difference, or of its RowExtremes, each in a ring of three rows.
+  enum Ring { kDifference = 0, kLargest = 1, kSmallest = 2 };
+  static constexpr int kRingRows = 3;
+  float* RingRow(Ring ring, int r) {
+    return space_->dog_rows.data() + (ring * kRingRows + r % kRingRows) * dogs_.cols();
+  }
 
   const Differences dogs_;
   const int num_octave_layers_;

@@ -125,7 +125,8 @@ std::optional<cv::Mat> DecodeCommonPng(std::string_view bytes) {
       width = BigEndian32(body);
       height = BigEndian32(body + 4);
       const uint8_t bit_depth = body[8], color_type = body[9];
-      const bool simple = body[10] == 0 && body[11] == 0 && body[12] == 0;  // Deflate, filters, no interlace.
+      const bool simple =
+          body[10] == 0 && body[11] == 0 && body[12] == 0;  // Deflate, filters, no interlace.
       channels = color_type == 0 ? 1 : color_type == 2 ? 3 : color_type == 6 ? 4 : 0;
       if (bit_depth != 8 || channels == 0 || !simple || width == 0 || height == 0) {
         return std::nullopt;

@@ -112,9 +112,8 @@ TEST(CommonPng, UndoesEveryFilterTypeInEveryLayout) {
 // Chunks libpng skips for these layouts are skipped here too.
 TEST(CommonPng, SkipsAncillaryChunksAndASuggestedPalette) {
   const cv::Mat image = RandomImage(3);
-  const std::string png =
-      MakePng(image, {{"tEXt", std::string("Comment\0made in a test", 22)},
-                      {"PLTE", std::string("\x01\x02\x03\x04\x05\x06", 6)}});
+  const std::string png = MakePng(image, {{"tEXt", std::string("Comment\0made in a test", 22)},
+                                          {"PLTE", std::string("\x01\x02\x03\x04\x05\x06", 6)}});
   const std::optional<cv::Mat> decoded = DecodeCommonPng(png);
   ASSERT_TRUE(decoded.has_value());
   EXPECT_TRUE(Identical(*decoded, DecodeImage(MakePng(image), ImageFormat::kPng)));
