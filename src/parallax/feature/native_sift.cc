@@ -502,13 +502,21 @@ int DescriptorRadius(float octave_scale, cv::Size layer_size) {
 }
 
 // Gaussian weights exp(-d^2 / (2 sigma^2)) for d = i - fraction, i = -radius..radius: a 2D
-// Gaussian window is the product of two of these, so a frame costs 2 (2 radius + 1) exps.
+// Gaussian window is the product of two of these. Three exponentials instead of 2 radius + 1:
+// neighbouring weights differ by the factor exp(-(2 d + 1) / (2 sigma^2)), which itself
+// changes by exp(-1 / sigma^2) from one to the next; in double, so that the products lose
+// nothing a float keeps (the expf per weight were 1.5 % of extraction).
 void GaussianWeights(int radius, float fraction, float sigma, std::vector<float>* weights) {
   weights->resize(2 * radius + 1);
-  const float scale = -0.5f / (sigma * sigma);
-  for (int i = -radius; i <= radius; ++i) {
-    const float d = static_cast<float>(i) - fraction;
-    (*weights)[i + radius] = std::exp(scale * d * d);
+  const double scale = -0.5 / (static_cast<double>(sigma) * sigma);
+  const double first = -radius - static_cast<double>(fraction);
+  double weight = std::exp(scale * first * first);
+  double ratio = std::exp(scale * (2 * first + 1));
+  const double ratio_step = std::exp(2 * scale);
+  for (float& w : *weights) {
+    w = static_cast<float>(weight);
+    weight *= ratio;
+    ratio *= ratio_step;
   }
 }
 
