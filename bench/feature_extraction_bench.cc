@@ -23,15 +23,19 @@
 namespace parallax {
 namespace {
 
+// The first `max_images` image files of a data set folder, or none when it is missing.
+std::vector<std::filesystem::path> ImagePaths(const std::string& folder, size_t max_images) {
+  const std::filesystem::path dir = DataRoot() / folder / "images";
+  if (!std::filesystem::is_directory(dir)) return {};
+  std::vector<std::filesystem::path> paths = ListImageFiles(dir);
+  if (paths.size() > max_images) paths.resize(max_images);
+  return paths;
+}
+
 // Gray images of a data set folder (the first `max_images`), or empty when it is missing.
 std::vector<cv::Mat> LoadGray(const std::string& folder, size_t max_images) {
-  const std::filesystem::path dir = DataRoot() / folder / "images";
   std::vector<cv::Mat> images;
-  if (!std::filesystem::is_directory(dir)) return images;
-  for (const auto& path : ListImageFiles(dir)) {
-    if (images.size() == max_images) break;
-    images.push_back(ReadBitmap(path).gray);
-  }
+  for (const auto& path : ImagePaths(folder, max_images)) images.push_back(ReadBitmap(path).gray);
   return images;
 }
 
@@ -127,12 +131,7 @@ BENCHMARK(BM_GaussianBlur)
 void BM_DecodePng(benchmark::State& state) {
   static const std::vector<std::string> files = [] {
     std::vector<std::string> bytes;
-    const std::filesystem::path dir = DataRoot() / "templeRing" / "images";
-    if (!std::filesystem::is_directory(dir)) return bytes;
-    for (const auto& path : ListImageFiles(dir)) {
-      if (bytes.size() == 8) break;
-      bytes.push_back(ReadFileToString(path));
-    }
+    for (const auto& path : ImagePaths("templeRing", 8)) bytes.push_back(ReadFileToString(path));
     return bytes;
   }();
   if (files.empty()) {

@@ -71,9 +71,9 @@ struct NativeSiftScaleSpace {
   // screen reads them.
   std::vector<float> dog_rows;
   cv::Mat magnitude_buffer, angle_buffer;
-  cv::Mat dx_rows, dy_rows;    // One row of differences, before PolarRow.
-  std::vector<float> samples;  // One row of a descriptor's samples.
-  HugePageBuffer memory;       // Holds every cv::Mat above but the two bands of rows.
+  std::vector<float> dx_row, dy_row;  // One row of differences, before PolarRow.
+  std::vector<float> samples;         // One row of a descriptor's samples.
+  HugePageBuffer memory;              // Holds every cv::Mat above.
 };
 
 namespace {
@@ -144,10 +144,10 @@ void PolarRow(const float* __restrict gx, const float* __restrict gy, int count,
 Gradient LayerGradient(const cv::Mat& image, const GradientRegion& region, ScaleSpace* space) {
   const cv::Rect corner(cv::Point(0, 0), image.size());
   Gradient gradient{space->magnitude_buffer(corner), space->angle_buffer(corner)};
-  space->dx_rows.create(1, space->magnitude_buffer.cols, CV_32F);
-  space->dy_rows.create(1, space->magnitude_buffer.cols, CV_32F);
-  float* gx = space->dx_rows.ptr<float>(0);
-  float* gy = space->dy_rows.ptr<float>(0);
+  space->dx_row.resize(space->magnitude_buffer.cols);
+  space->dy_row.resize(space->magnitude_buffer.cols);
+  float* gx = space->dx_row.data();
+  float* gy = space->dy_row.data();
   for (int b = 0; b < region.NumBands(); ++b) {
     const int col_begin = region.ColumnBegin(b), col_end = region.ColumnEnd(b);
     if (col_begin >= col_end) continue;
