@@ -415,6 +415,15 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
     Eigen::VectorXd& b = partial_vector_[chunk];
     s.SetZero();
     b.setZero(n);
+    // The point's views with a variable pose or camera, in observation order: the pairs of
+    // the others add nothing, and in a local adjustment most views are of constant images
+    // (walking all pairs, their bookkeeping took more time than the products).
+    struct VariableView {
+      int pose = -1;  // Offsets in the reduced system (-1: constant), and the camera's size.
+      int camera = -1;
+      int dim = 0;
+    };
+    std::vector<VariableView> views;
     std::vector<Matrix63> w_pose, y_pose;
     std::vector<MatrixC3> w_camera, y_camera;
     for (int j = chunk_begin_[chunk]; j < chunk_begin_[chunk + 1]; ++j) {
@@ -429,24 +438,31 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
       v_inverse_[j] = llt.solve(Eigen::Matrix3d::Identity());
       const size_t begin = point_begin_[j];
       const size_t m = point_begin_[j + 1] - begin;
-      w_pose.resize(m);
-      y_pose.resize(m);
-      w_camera.resize(m);
-      y_camera.resize(m);
+      if (w_pose.size() < m) {
+        w_pose.resize(m);
+        y_pose.resize(m);
+        w_camera.resize(m);
+        y_camera.resize(m);
+      }
+      views.clear();
       for (size_t a = 0; a < m; ++a) {
         const size_t k = begin + a;
         const auto& observation = observations_[k];
-        const ObservationJacobian& jacobian = jacobians_[k];
-        if (pose_offset_[observation.pose] >= 0) {
-          w_pose[a].noalias() = jacobian.pose.transpose() * jacobian.point;
-          y_pose[a].noalias() = w_pose[a] * v_inverse_[j];
-          b.segment<6>(pose_offset_[observation.pose]).noalias() += y_pose[a] * g_point_[j];
-        }
         const int c = observation.camera;
-        if (camera_offset_[c] >= 0) {
-          w_camera[a].noalias() = CameraJacobian(k, camera_dim_[c]).transpose() * jacobian.point;
-          y_camera[a].noalias() = w_camera[a] * v_inverse_[j];
-          b.segment(camera_offset_[c], camera_dim_[c]).noalias() += y_camera[a] * g_point_[j];
+        const VariableView view{pose_offset_[observation.pose], camera_offset_[c], camera_dim_[c]};
+        if (view.pose < 0 && view.camera < 0) continue;
+        const size_t i = views.size();
+        views.push_back(view);
+        const ObservationJacobian& jacobian = jacobians_[k];
+        if (view.pose >= 0) {
+          w_pose[i].noalias() = jacobian.pose.transpose() * jacobian.point;
+          y_pose[i].noalias() = w_pose[i] * v_inverse_[j];
+          b.segment<6>(view.pose).noalias() += y_pose[i] * g_point_[j];
+        }
+        if (view.camera >= 0) {
+          w_camera[i].noalias() = CameraJacobian(k, view.dim).transpose() * jacobian.point;
+          y_camera[i].noalias() = w_camera[i] * v_inverse_[j];
+          b.segment(view.camera, view.dim).noalias() += y_camera[i] * g_point_[j];
         }
       }
       // One variable camera in every view of the point (a collection from one camera): its
@@ -470,16 +486,10 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
       };
       // Block (a, b) of the sum is Y_a W_b^T; only blocks on or below the diagonal are
       // written, each once: pairs b <= a, and for b == a the two segments in one order.
-      for (size_t a = 0; a < m; ++a) {
-        const auto& obs_a = observations_[begin + a];
-        const int pose_a = pose_offset_[obs_a.pose];
-        const int camera_a = camera_offset_[obs_a.camera];
-        const int dim_a = camera_dim_[obs_a.camera];
+      for (size_t a = 0; a < views.size(); ++a) {
+        const auto [pose_a, camera_a, dim_a] = views[a];
         for (size_t bi = 0; bi <= a; ++bi) {
-          const auto& obs_b = observations_[begin + bi];
-          const int pose_b = pose_offset_[obs_b.pose];
-          const int camera_b = camera_offset_[obs_b.camera];
-          const int dim_b = camera_dim_[obs_b.camera];
+          const auto [pose_b, camera_b, dim_b] = views[bi];
           if (pose_a >= 0 && pose_b >= 0) {
             if (pose_a > pose_b) {
               SubtractPoseProduct(y_pose[a], w_pose[bi], s.template Block<6, 6>(pose_a, pose_b));
@@ -517,15 +527,14 @@ bool SchurSolver<ReducedMatrix>::ComputeStep(double radius, Eigen::VectorXd* cam
         }
       }
       if (shared_camera >= 0) {
+        // Every view is variable here (its camera is), so views[a] is observation a.
         const int offset = camera_offset_[shared_camera];
         const int dim = camera_dim_[shared_camera];
         MatrixC3 w_sum = w_camera[0];
         for (size_t a = 1; a < m; ++a) w_sum += w_camera[a];
         const MatrixC3 y_sum = w_sum * v_inverse_[j];
         s.Block(offset, offset, dim, dim).noalias() -= y_sum * w_sum.transpose();
-        for (size_t a = 0; a < m; ++a) {
-          cross(pose_offset_[observations_[begin + a].pose], y_pose[a], offset, dim, w_sum);
-        }
+        for (size_t a = 0; a < m; ++a) cross(views[a].pose, y_pose[a], offset, dim, w_sum);
       }
     }
   });
