@@ -101,7 +101,11 @@ BundleAdjustmentProblem GatherBundleAdjustmentProblem(const BundleAdjustmentOpti
     problem.points.push_back({&reconstruction->GetPoint3D(point3D_id).xyz,
                               config.constant_points.count(point3D_id) > 0});
   }
-  const auto point_index = [&](point3D_t point3D_id) { return index_of_point.at(point3D_id); };
+  const auto point_index = [&](point3D_t point3D_id) {
+    const auto it = index_of_point.find(point3D_id);
+    PARALLAX_CHECK(it != index_of_point.end());
+    return it->second;
+  };
   const auto add_pose = [&](image_t image_id, bool constant) {
     BundleAdjustmentProblem::Pose pose;
     pose.image_id = image_id;
