@@ -42,6 +42,7 @@ constexpr float kDescriptorClamp = 0.2f;
 // A descriptor's histogram is padded by one cell on every side, so that each sample's adds
 // need no bounds checks; a cell's eight orientations are one Float8.
 constexpr int kPaddedGrid = kDescriptorGrid + 2;
+constexpr int kDescriptorHistogramSize = kPaddedGrid * kPaddedGrid * kDescriptorOrientations;
 static_assert(kDescriptorSize == 128);
 static_assert(kDescriptorOrientations == 8);
 
@@ -73,6 +74,7 @@ struct NativeSiftScaleSpace {
   cv::Mat magnitude_buffer, angle_buffer;
   std::vector<float> dx_row, dy_row;  // One row of differences, before PolarRow.
   std::vector<float> samples;         // One row of a descriptor's samples.
+  std::vector<int32_t> offsets;       // Their histogram cells (FrameDescriptor).
   HugePageBuffer memory;              // Holds every cv::Mat above.
 };
 
@@ -643,17 +645,19 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
 
 // The descriptor bins and weights of `count` samples along a row: sample i is at bin (bin_x
 // + i step_x, bin_y + i step_y), and weighs nothing outside the window. For each sample, the
-// padded histogram's index of its lowest (column, row) cell, its fractions towards the next
-// ones, and its orientation in bins, in [0, 8). A function of its own, with __restrict, so that the
-// compiler vectorises it (inlined into the row loop it did not; and it needs -fno-trapping-math,
-// see CMakeLists.txt). The floors here, in vector registers, took a quarter of the time of the
-// scalar loop that adds the samples.
+// offset in the histograms of its lowest (column, row) cell (in the copy for even or odd i),
+// its weight for each of the 2 x 2 cells from there, and its orientation in bins, in [0, 8).
+// A function of its own, with __restrict, so that the compiler vectorises it (inlined into
+// the row loop it did not; and it needs -fno-trapping-math, see CMakeLists.txt). The floors
+// here, in vector registers, took a quarter of the time of the scalar loop that adds the
+// samples; the cells' weights, computed there, were a quarter of that loop's instructions.
 void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float step_y,
                        const float* __restrict angle, float orientation,
                        const float* __restrict magnitude, const float* __restrict window_x,
-                       float window_y, float* __restrict sample_cell, float* __restrict sample_fx,
-                       float* __restrict sample_fy, float* __restrict sample_orientation,
-                       float* __restrict sample_weight) {
+                       float window_y, int32_t* __restrict sample_offset,
+                       float* __restrict sample_orientation, float* __restrict sample_w00,
+                       float* __restrict sample_w01, float* __restrict sample_w10,
+                       float* __restrict sample_w11) {
   constexpr float kBinsPerRadian = kDescriptorOrientations / kTwoPi;
   constexpr float kLastOrientationBin = 7.99999952f;  // The float below 8.
   for (int i = 0; i < count; ++i) {
@@ -672,11 +676,18 @@ void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float 
     // the window the bins are meaningless (and never used): clamped, so the conversions
     // stay in range.
     const float x0 = std::floor(inside ? x : 0.0f), y0 = std::floor(inside ? y : 0.0f);
-    sample_fx[i] = x - x0;
-    sample_fy[i] = y - y0;
-    // A float (an exact integer), converted where it is used.
-    sample_cell[i] = (y0 + 1.0f) * kPaddedGrid + (x0 + 1.0f);
-    sample_weight[i] = (inside ? window_y : 0.0f) * magnitude[i] * window_x[i];
+    const float fx = x - x0, fy = y - y0;
+    const float cell = (y0 + 1.0f) * kPaddedGrid + (x0 + 1.0f);  // An exact integer.
+    sample_offset[i] =
+        static_cast<int32_t>(cell) * kDescriptorOrientations + (i & 1) * kDescriptorHistogramSize;
+    // The sample's weight split over the 2 x 2 cells around it (bilinearly).
+    const float weight = (inside ? window_y : 0.0f) * magnitude[i] * window_x[i];
+    const float w1 = weight * fy, w0 = weight - w1;
+    const float w11 = w1 * fx, w01 = w0 * fx;
+    sample_w00[i] = w0 - w01;
+    sample_w01[i] = w01;
+    sample_w10[i] = w1 - w11;
+    sample_w11[i] = w11;
   }
 }
 
@@ -685,7 +696,8 @@ void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float 
 // orientation) bins, under a Gaussian window of two bins' sigma; then unit-L2, clamped at
 // 0.2 and renormalised against lighting changes.
 void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_scale,
-                     float orientation, std::vector<float>* samples, float* descriptor) {
+                     float orientation, std::vector<float>* samples, std::vector<int32_t>* offsets,
+                     float* descriptor) {
   const cv::Mat& magnitude = gradient.magnitude;
   const cv::Mat& angle = gradient.angle;
   const float bin_side = kDescriptorMagnification * octave_scale;
@@ -703,8 +715,7 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
   // weights, scaled per cell. The padding is dropped afterwards.
   // Two copies, for even and odd columns: neighbouring samples mostly hit the same cells, and
   // alternating copies lets one sample's adds start before the last one's have landed.
-  constexpr int kHistogramSize = kPaddedGrid * kPaddedGrid * kDescriptorOrientations;
-  alignas(32) std::array<float, 2 * kHistogramSize> histogram{};
+  alignas(32) std::array<float, 2 * kDescriptorHistogramSize> histogram{};
   const Float8 bin_index = {0, 1, 2, 3, 4, 5, 6, 7};
   const Float8 zero = {}, one = zero + 1.0f, num_bins = zero + kDescriptorOrientations;
   for (int dy = -radius; dy <= radius; ++dy) {
@@ -740,22 +751,22 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
     const int count = c_end - c_begin + 1;
     if (count <= 0) continue;
     samples->resize(5 * static_cast<size_t>(count));
-    float* sample_cell = samples->data();
-    float* sample_fx = sample_cell + count;
-    float* sample_fy = sample_fx + count;
-    float* sample_orientation = sample_fy + count;
-    float* sample_weight = sample_orientation + count;
+    offsets->resize(count);
+    int32_t* sample_offset = offsets->data();
+    float* sample_orientation = samples->data();
+    float* sample_w00 = sample_orientation + count;
+    float* sample_w01 = sample_w00 + count;
+    float* sample_w10 = sample_w01 + count;
+    float* sample_w11 = sample_w10 + count;
     const float bin_x_begin =
         cos_t * (static_cast<float>(c_begin) - x) + sin_t * oy + half_grid - 0.5f;
     const float bin_y_begin =
         -sin_t * (static_cast<float>(c_begin) - x) + cos_t * oy + half_grid - 0.5f;
     DescriptorSamples(count, bin_x_begin, bin_y_begin, cos_t, -sin_t, ang_row + c_begin,
                       orientation, mag_row + c_begin, weights_x.data() + (c_begin - xi + radius),
-                      weight_y, sample_cell, sample_fx, sample_fy, sample_orientation,
-                      sample_weight);
+                      weight_y, sample_offset, sample_orientation, sample_w00, sample_w01,
+                      sample_w10, sample_w11);
     for (int i = 0; i < count; ++i) {
-      const float weight = sample_weight[i];
-      if (weight == 0.0f) continue;
       // Bin b takes 1 - (circular distance from the sample's orientation), when positive:
       // 1 - fo for the bin below, fo for the one above (bin 0 above bin 7).
       Float8 distance = bin_index - sample_orientation[i];
@@ -763,16 +774,14 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
       distance = distance < num_bins - distance ? distance : num_bins - distance;
       Float8 share = one - distance;
       share = share > zero ? share : zero;
-      const float fx = sample_fx[i], fy = sample_fy[i];
-      const float w1 = weight * fy, w0 = weight - w1;
-      const float w11 = w1 * fx, w10 = w1 - w11, w01 = w0 * fx, w00 = w0 - w01;
-      float* cell = histogram.data() + (i & 1) * kHistogramSize +
-                    kDescriptorOrientations * static_cast<int>(sample_cell[i]);
+      float* cell = histogram.data() + sample_offset[i];
       float* below = cell + kPaddedGrid * kDescriptorOrientations;
-      Store8(cell, Load8(cell) + w00 * share);
-      Store8(cell + kDescriptorOrientations, Load8(cell + kDescriptorOrientations) + w01 * share);
-      Store8(below, Load8(below) + w10 * share);
-      Store8(below + kDescriptorOrientations, Load8(below + kDescriptorOrientations) + w11 * share);
+      Store8(cell, Load8(cell) + sample_w00[i] * share);
+      Store8(cell + kDescriptorOrientations,
+             Load8(cell + kDescriptorOrientations) + sample_w01[i] * share);
+      Store8(below, Load8(below) + sample_w10[i] * share);
+      Store8(below + kDescriptorOrientations,
+             Load8(below + kDescriptorOrientations) + sample_w11[i] * share);
     }
   }
   for (int by = 0; by < kDescriptorGrid; ++by) {
@@ -780,7 +789,7 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
       const float* cell =
           histogram.data() + ((by + 1) * kPaddedGrid + (bx + 1)) * kDescriptorOrientations;
       float* out = descriptor + (by * kDescriptorGrid + bx) * kDescriptorOrientations;
-      Store8(out, Load8(cell) + Load8(cell + kHistogramSize));
+      Store8(out, Load8(cell) + Load8(cell + kDescriptorHistogramSize));
     }
   }
 
@@ -928,6 +937,7 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
         unranked_descriptors.resize(unranked_descriptors.size() + kDescriptorSize);
         FrameDescriptor(
             gradient, extremum.x, extremum.y, extremum.octave_scale, orientation, &space.samples,
+            &space.offsets,
             unranked_descriptors.data() + unranked_descriptors.size() - kDescriptorSize);
       }
     }
