@@ -1,6 +1,11 @@
 #pragma once
 
+#include <cstdint>
 #include <cstring>
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 
 namespace parallax {
 
@@ -8,6 +13,7 @@ namespace parallax {
 // accumulators the compiler kept went through the stack). Built for a target without AVX2,
 // each is two SSE registers.
 typedef float Float8 __attribute__((vector_size(32)));
+typedef int32_t Int8 __attribute__((vector_size(32)));
 
 inline Float8 Load8(const float* p) {
   Float8 v;
@@ -16,5 +22,30 @@ inline Float8 Load8(const float* p) {
 }
 
 inline void Store8(float* p, Float8 v) { std::memcpy(p, &v, sizeof(v)); }
+
+// |v|, by clearing the sign bits: one AND (GCC makes a negation and a blend of v < 0 ? -v : v).
+inline Float8 Abs8(Float8 v) {
+  return reinterpret_cast<Float8>(reinterpret_cast<Int8>(v) & 0x7fffffff);
+}
+
+// a < b ? a : b and a > b ? a : b, lane by lane: vminps and vmaxps compute exactly these
+// (NaNs included), where GCC makes a comparison and a blend of the vector extension's ternary.
+inline Float8 Min8(Float8 a, Float8 b) {
+#if defined(__AVX__)
+  return reinterpret_cast<Float8>(
+      _mm256_min_ps(reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(b)));
+#else
+  return a < b ? a : b;
+#endif
+}
+
+inline Float8 Max8(Float8 a, Float8 b) {
+#if defined(__AVX__)
+  return reinterpret_cast<Float8>(
+      _mm256_max_ps(reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(b)));
+#else
+  return a > b ? a : b;
+#endif
+}
 
 }  // namespace parallax

@@ -769,11 +769,9 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
     for (int i = 0; i < count; ++i) {
       // Bin b takes 1 - (circular distance from the sample's orientation), when positive:
       // 1 - fo for the bin below, fo for the one above (bin 0 above bin 7).
-      Float8 distance = bin_index - sample_orientation[i];
-      distance = distance < zero ? -distance : distance;
-      distance = distance < num_bins - distance ? distance : num_bins - distance;
-      Float8 share = one - distance;
-      share = share > zero ? share : zero;
+      Float8 distance = Abs8(bin_index - sample_orientation[i]);
+      distance = Min8(distance, num_bins - distance);
+      const Float8 share = Max8(one - distance, zero);
       float* cell = histogram.data() + sample_offset[i];
       float* below = cell + kPaddedGrid * kDescriptorOrientations;
       Store8(cell, Load8(cell) + sample_w00[i] * share);
