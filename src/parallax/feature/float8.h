@@ -48,4 +48,15 @@ inline Float8 Max8(Float8 a, Float8 b) {
 #endif
 }
 
+// Bit i set where lane i of `mask` (a comparison's result: all ones or all zeros) is set.
+inline uint32_t MoveMask8(Int8 mask) {
+#if defined(__AVX__)
+  return static_cast<uint32_t>(_mm256_movemask_ps(reinterpret_cast<__m256>(mask)));
+#else
+  uint32_t bits = 0;
+  for (int i = 0; i < 8; ++i) bits |= static_cast<uint32_t>(mask[i] != 0) << i;
+  return bits;
+#endif
+}
+
 }  // namespace parallax

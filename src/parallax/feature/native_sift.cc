@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
@@ -343,34 +344,48 @@ void RowExtremes(const float* __restrict row, int cols, float* __restrict larges
   }
 }
 
-// candidates[c] = 1 where sample (r, c) passes the contrast screen and is an extremum of the
-// 3 x 3 samples around it in its own layer: the cheap tests, in a loop without branches that
-// the compiler vectorises, so that IsExtremumAcrossScales sees a few samples of each row
-// instead of all. Takes row r and the RowExtremes of rows r - 1, r and r + 1: a sample is at
-// least its eight neighbours exactly when it is at least the largest of those three (its own
-// row's include itself), two comparisons where the eight took seven.
-void ScreenRow(const float* __restrict row, const float* __restrict largest_above,
-               const float* __restrict largest_at, const float* __restrict largest_below,
-               const float* __restrict smallest_above, const float* __restrict smallest_at,
-               const float* __restrict smallest_below, int cols, float screen,
-               std::vector<uint8_t>* candidates) {
-  candidates->assign(cols, 0);
-  uint8_t* __restrict out = candidates->data();
-  for (int c = 1; c + 1 < cols; ++c) {
-    const float v = row[c];
-    const float around_max = Max2(Max2(largest_above[c], largest_at[c]), largest_below[c]);
-    const float around_min = Min2(Min2(smallest_above[c], smallest_at[c]), smallest_below[c]);
-    // Bitwise, not logical, operators: no branch, so the loop vectorises.
-    const int maximum = static_cast<int>(v > screen) & static_cast<int>(v >= around_max);
-    const int minimum = static_cast<int>(v < -screen) & static_cast<int>(v <= around_min);
-    out[c] = static_cast<uint8_t>(maximum | minimum);
-  }
-}
-
 // A sample of a difference of Gaussians that passed ScreenRow.
 struct ScreenedSample {
   int layer = 0, row = 0, col = 0;
 };
+
+// Appends to `samples` the samples (layer, r, c) of row r of a difference, columns 1 to
+// cols - 2, that pass the contrast screen and are extrema of the 3 x 3 samples around them in
+// their own layer: the cheap tests, eight samples at a time, so that IsExtremumAcrossScales
+// sees a few samples of each row instead of all. Takes row r and the RowExtremes of rows
+// r - 1, r and r + 1: a sample is at least its eight neighbours exactly when it is at least
+// the largest of those three (its own row's include itself), two comparisons where the eight
+// took seven. Most rows have no candidate: a bit per sample (MoveMask8) skips eight at once,
+// where a byte per sample took another pass to write and one to scan.
+static_assert(kImageBorder == 1, "ScreenRow screens columns 1 to cols - 2");
+void ScreenRow(const float* __restrict row, const float* __restrict largest_above,
+               const float* __restrict largest_at, const float* __restrict largest_below,
+               const float* __restrict smallest_above, const float* __restrict smallest_at,
+               const float* __restrict smallest_below, int cols, float screen, int layer, int r,
+               std::vector<ScreenedSample>* samples) {
+  const Float8 above_screen = Float8{} + screen, below_screen = Float8{} - screen;
+  int c = 1;
+  for (; c + 8 <= cols - 1; c += 8) {
+    const Float8 v = Load8(row + c);
+    const Float8 around_max =
+        Max8(Max8(Load8(largest_above + c), Load8(largest_at + c)), Load8(largest_below + c));
+    const Float8 around_min =
+        Min8(Min8(Load8(smallest_above + c), Load8(smallest_at + c)), Load8(smallest_below + c));
+    const Int8 hits =
+        ((v > above_screen) & (v >= around_max)) | ((v < below_screen) & (v <= around_min));
+    for (uint32_t mask = MoveMask8(hits); mask != 0; mask &= mask - 1) {
+      samples->push_back({layer, r, c + std::countr_zero(mask)});
+    }
+  }
+  for (; c < cols - 1; ++c) {
+    const float v = row[c];
+    const float around_max = Max2(Max2(largest_above[c], largest_at[c]), largest_below[c]);
+    const float around_min = Min2(Min2(smallest_above[c], smallest_at[c]), smallest_below[c]);
+    if ((v > screen && v >= around_max) || (v < -screen && v <= around_min)) {
+      samples->push_back({layer, r, c});
+    }
+  }
+}
 
 // Screens differences 1 to S of an octave while BuildOctave blurs it: row r - 1 of difference
 // k - 1 as soon as row r of layer k is written, while that row and the same row of layer k - 1
@@ -397,19 +412,7 @@ class DogScreen {
     ScreenRow(RingRow(kDifference, centre), RingRow(kLargest, centre - 1),
               RingRow(kLargest, centre), RingRow(kLargest, centre + 1),
               RingRow(kSmallest, centre - 1), RingRow(kSmallest, centre),
-              RingRow(kSmallest, centre + 1), cols, screen_, &flags_);
-    for (int c = kImageBorder; c < cols - kImageBorder; ++c) {
-      // Most samples fail the screen: skip them eight at a time.
-      if (c + 8 <= cols - kImageBorder) {
-        uint64_t eight;
-        std::memcpy(&eight, flags_.data() + c, sizeof(eight));
-        if (eight == 0) {
-          c += 7;
-          continue;
-        }
-      }
-      if (flags_[c]) samples_.push_back({dog, centre, c});
-    }
+              RingRow(kSmallest, centre + 1), cols, screen_, dog, centre, &samples_);
   }
 
   // In the order of a scan by difference, row and column.
@@ -427,7 +430,6 @@ class DogScreen {
   const int num_octave_layers_;
   const float screen_;
   ScaleSpace* const space_;
-  std::vector<uint8_t> flags_;
   std::vector<ScreenedSample> samples_;
 };
 
