@@ -143,41 +143,63 @@ void PolarRow(const float* __restrict gx, const float* __restrict gy, int count,
 
 // The gradient of one Gaussian layer, by central differences (zero on the one-pixel border),
 // in the corners of the shared buffers, computed only in `region` (elsewhere the buffers
-// hold whatever they held).
-Gradient LayerGradient(const cv::Mat& image, const GradientRegion& region, ScaleSpace* space) {
-  const cv::Rect corner(cv::Point(0, 0), image.size());
-  Gradient gradient{space->magnitude_buffer(corner), space->angle_buffer(corner)};
-  space->dx_row.resize(space->magnitude_buffer.cols);
-  space->dy_row.resize(space->magnitude_buffer.cols);
-  float* gx = space->dx_row.data();
-  float* gy = space->dy_row.data();
-  for (int b = 0; b < region.NumBands(); ++b) {
-    const int col_begin = region.ColumnBegin(b), col_end = region.ColumnEnd(b);
-    if (col_begin >= col_end) continue;
+// hold whatever they held), band by band as the layer's frames reach them in scan order:
+// each band is read while it is still in cache, where a gradient computed for the whole
+// layer first came back from memory for every frame.
+class LayerGradient {
+ public:
+  LayerGradient(const cv::Mat& image, const GradientRegion& region, ScaleSpace* space)
+      : image_(image),
+        region_(region),
+        gradient_{space->magnitude_buffer(cv::Rect(cv::Point(0, 0), image.size())),
+                  space->angle_buffer(cv::Rect(cv::Point(0, 0), image.size()))},
+        space_(space) {
+    space->dx_row.resize(space->magnitude_buffer.cols);
+    space->dy_row.resize(space->magnitude_buffer.cols);
+  }
+
+  // The gradient, computed at least through row `last_row` of the region.
+  const Gradient& Through(int last_row) {
+    const int last_band = std::min(last_row / kGradientBandRows, region_.NumBands() - 1);
+    for (; next_band_ <= last_band; ++next_band_) ComputeBand(next_band_);
+    return gradient_;
+  }
+
+ private:
+  void ComputeBand(int b) {
+    const int col_begin = region_.ColumnBegin(b), col_end = region_.ColumnEnd(b);
+    if (col_begin >= col_end) return;
+    float* gx = space_->dx_row.data();
+    float* gy = space_->dy_row.data();
     const int band = b * kGradientBandRows;
-    const int band_rows = std::min(kGradientBandRows, image.rows - band);
+    const int band_rows = std::min(kGradientBandRows, image_.rows - band);
     for (int r = band; r < band + band_rows; ++r) {
-      if (r == 0 || r + 1 == image.rows) {
+      if (r == 0 || r + 1 == image_.rows) {
         std::fill(gx + col_begin, gx + col_end, 0.0f);
         std::fill(gy + col_begin, gy + col_end, 0.0f);
       } else {
-        const float* above = image.ptr<float>(r - 1);
-        const float* row = image.ptr<float>(r);
-        const float* below = image.ptr<float>(r + 1);
-        for (int c = std::max(col_begin, 1); c < std::min(col_end, image.cols - 1); ++c) {
+        const float* above = image_.ptr<float>(r - 1);
+        const float* row = image_.ptr<float>(r);
+        const float* below = image_.ptr<float>(r + 1);
+        for (int c = std::max(col_begin, 1); c < std::min(col_end, image_.cols - 1); ++c) {
           gx[c] = 0.5f * (row[c + 1] - row[c - 1]);
           gy[c] = 0.5f * (below[c] - above[c]);
         }
         if (col_begin == 0) gx[0] = gy[0] = 0;
-        if (col_end == image.cols) gx[image.cols - 1] = gy[image.cols - 1] = 0;
+        if (col_end == image_.cols) gx[image_.cols - 1] = gy[image_.cols - 1] = 0;
       }
       PolarRow(gx + col_begin, gy + col_begin, col_end - col_begin,
-               gradient.magnitude.ptr<float>(r) + col_begin,
-               gradient.angle.ptr<float>(r) + col_begin);
+               gradient_.magnitude.ptr<float>(r) + col_begin,
+               gradient_.angle.ptr<float>(r) + col_begin);
     }
   }
-  return gradient;
-}
+
+  const cv::Mat& image_;
+  const GradientRegion& region_;
+  Gradient gradient_;
+  ScaleSpace* space_;
+  int next_band_ = 0;
+};
 
 // Points every float image of the scale space (input, doubled input, each octave's
 // Gaussian layers, the gradient) into one huge-page block, laid out the same way for every
@@ -526,6 +548,11 @@ int DescriptorRadius(float octave_scale, cv::Size layer_size) {
       layer_size.height * layer_size.height + layer_size.width * layer_size.width)));
   return std::min(max_radius, static_cast<int>(std::lround(bin_side * std::sqrt(2.0f) *
                                                            (kDescriptorGrid + 1) * 0.5f)));
+}
+
+// Half-side of the square of gradient samples a frame reads, for both.
+int GradientRadius(float octave_scale, cv::Size layer_size) {
+  return std::max(OrientationRadius(octave_scale), DescriptorRadius(octave_scale, layer_size));
 }
 
 // Gaussian weights exp(-d^2 / (2 sigma^2)) for d = i - fraction, i = -radius..radius: a 2D
@@ -921,14 +948,16 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
     GradientRegion region(layer.size());
     for (size_t i = begin; i < end; ++i) {
       const Detection& extremum = extrema[i];
-      const int radius = std::max(OrientationRadius(extremum.octave_scale),
-                                  DescriptorRadius(extremum.octave_scale, layer.size()));
+      const int radius = GradientRadius(extremum.octave_scale, layer.size());
       region.AddSquare(static_cast<int>(std::lround(extremum.x)),
                        static_cast<int>(std::lround(extremum.y)), radius);
     }
-    const Gradient gradient = LayerGradient(layer, region, &space);
+    LayerGradient layer_gradient(layer, region, &space);
     for (size_t i = begin; i < end; ++i) {
       const Detection& extremum = extrema[i];
+      const int radius = GradientRadius(extremum.octave_scale, layer.size());
+      const Gradient& gradient =
+          layer_gradient.Through(static_cast<int>(std::lround(extremum.y)) + radius);
       for (const float orientation :
            FrameOrientations(gradient, extremum.x, extremum.y, extremum.octave_scale,
                              options.max_num_orientations, &space.samples)) {
