@@ -6,7 +6,6 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <functional>
 #include <opencv2/imgproc.hpp>
 #include <optional>
