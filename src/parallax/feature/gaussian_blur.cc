@@ -27,8 +27,8 @@ inline void AddRow(const float* row, const float* kernel, int j, int x,
 #pragma GCC unroll 4
   for (int q = kFirst; q <= kLast; ++q) {
     const Float8 k = Float8{} + kernel[j - q];
-    acc[q][0] += k * low;
-    acc[q][1] += k * high;
+    acc[q][0] = MulAdd8(k, low, acc[q][0]);
+    acc[q][1] = MulAdd8(k, high, acc[q][1]);
   }
 }
 
@@ -58,7 +58,7 @@ void VerticalStep(const float* const* rows, const float* kernel, int taps, int w
   for (; x < width; ++x) {
     std::array<float, kRowsPerStep> acc{};
     for (int j = 0; j <= last; ++j) {
-      for (int q = 0; q < kRowsPerStep; ++q) acc[q] += kernel[j - q] * rows[j][x];
+      for (int q = 0; q < kRowsPerStep; ++q) acc[q] = MulAdd(kernel[j - q], rows[j][x], acc[q]);
     }
     for (int q = 0; q < kRowsPerStep; ++q) out[q][x] = acc[q];
   }
@@ -80,20 +80,20 @@ void HorizontalRow(const float* row, const Float8* taps, int radius, int width, 
       const Float8 k = taps[i];
       const float* a = centre - i;
       const float* b = centre + i;
-      acc0 += k * (Load8(a) + Load8(b));
-      acc1 += k * (Load8(a + 8) + Load8(b + 8));
-      acc2 += k * (Load8(a + 16) + Load8(b + 16));
-      acc3 += k * (Load8(a + 24) + Load8(b + 24));
+      acc0 = MulAdd8(k, Load8(a) + Load8(b), acc0);
+      acc1 = MulAdd8(k, Load8(a + 8) + Load8(b + 8), acc1);
+      acc2 = MulAdd8(k, Load8(a + 16) + Load8(b + 16), acc2);
+      acc3 = MulAdd8(k, Load8(a + 24) + Load8(b + 24), acc3);
     }
     Store8(out + x, acc0);
     Store8(out + x + 8, acc1);
     Store8(out + x + 16, acc2);
     Store8(out + x + 24, acc3);
   }
-  // The same sums in the same order as the full blocks'.
+  // The same sums in the same order as the full blocks', rounded alike (MulAdd).
   for (; x < width; ++x) {
     float acc = taps[0][0] * row[x];
-    for (int i = 1; i <= radius; ++i) acc += taps[i][0] * (row[x - i] + row[x + i]);
+    for (int i = 1; i <= radius; ++i) acc = MulAdd(taps[i][0], row[x - i] + row[x + i], acc);
     out[x] = acc;
   }
 }
@@ -110,44 +110,77 @@ std::vector<float> GaussianHalfKernel(double sigma) {
   return half;
 }
 
+WindowedGaussianBlur::WindowedGaussianBlur(const cv::Mat& src, double sigma) : src_(src) {
+  PARALLAX_CHECK_EQ(src.type(), CV_32F);
+  const std::vector<float> half = GaussianHalfKernel(sigma);
+  radius_ = static_cast<int>(half.size()) - 1;
+  const int taps = 2 * radius_ + 1;
+  half_taps_.resize(half.size());
+  for (size_t i = 0; i < half.size(); ++i) half_taps_[i] = Float8{} + half[i];
+  // The whole kernel, with the zeros VerticalStep reads on either side.
+  padded_kernel_.assign(taps + 2 * (kRowsPerStep - 1), 0.0f);
+  float* kernel = padded_kernel_.data() + kRowsPerStep - 1;
+  for (int j = 0; j < taps; ++j) kernel[j] = half[std::abs(j - radius_)];
+  inputs_.resize(taps + kRowsPerStep - 1);
+}
+
+void WindowedGaussianBlur::Blur(cv::Rect window, cv::Mat* dst,
+                                const std::function<void(int row)>& row_done) {
+  PARALLAX_CHECK(dst != nullptr);
+  PARALLAX_CHECK((window & cv::Rect(cv::Point(0, 0), src_.size())) == window);
+  if (window.empty()) return;
+  PARALLAX_CHECK(dst->data != src_.data);
+  PARALLAX_CHECK(dst->size() == src_.size() && dst->type() == CV_32F);
+  const int rows = src_.rows, cols = src_.cols, radius = radius_;
+  const int taps = 2 * radius + 1;
+  const float* kernel = padded_kernel_.data() + kRowsPerStep - 1;
+
+  // The vertical pass covers the columns the window's horizontal pass reads, widened to
+  // whole blocks of VerticalStep where the image allows (the extra columns are never read,
+  // and a narrow window's columns would otherwise go one by one); each of its rows is padded
+  // by replicated samples where those columns leave the image. Past the last row, a step's
+  // rows are made from clamped inputs and dropped.
+  const int needed_begin = std::max(0, window.x - radius);
+  const int needed_end = std::min(cols, window.x + window.width + radius);
+  const int width = std::min(
+      cols, (needed_end - needed_begin + kVerticalBlock - 1) / kVerticalBlock * kVerticalBlock);
+  const int vertical_begin = std::min(needed_begin, cols - width);
+  // A padded row holds columns [low, high): the window's, `radius` more on each side, and
+  // any more the vertical pass makes.
+  const int window_end_col = window.x + window.width;
+  const int low = std::min(window.x - radius, vertical_begin);
+  const int high = std::max(window_end_col + radius, vertical_begin + width);
+  const int stride = high - low;
+  vertical_.resize(kRowsPerStep * static_cast<size_t>(stride));
+  std::array<float*, kRowsPerStep> vertical_rows;
+  for (int q = 0; q < kRowsPerStep; ++q) {
+    vertical_rows[q] = vertical_.data() + q * stride + (vertical_begin - low);
+  }
+  const int window_end = window.y + window.height;
+  for (int r = window.y; r < window_end; r += kRowsPerStep) {
+    for (int j = 0; j < static_cast<int>(inputs_.size()); ++j) {
+      inputs_[j] = src_.ptr<float>(std::clamp(r - radius + j, 0, rows - 1)) + vertical_begin;
+    }
+    VerticalStep(inputs_.data(), kernel, taps, width, vertical_rows.data());
+    for (int q = 0; q < kRowsPerStep && r + q < window_end; ++q) {
+      float* row = vertical_.data() + q * stride;  // row[x - low] is column x.
+      for (int x = window.x - radius; x < 0; ++x) row[x - low] = row[-low];
+      for (int x = cols; x < window_end_col + radius; ++x) row[x - low] = row[cols - 1 - low];
+      HorizontalRow(row + (window.x - low), half_taps_.data(), radius, window.width,
+                    dst->ptr<float>(r + q) + window.x);
+      if (row_done) row_done(r + q);
+    }
+  }
+}
+
 void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst,
                   const std::function<void(int row)>& row_done) {
   PARALLAX_CHECK(dst != nullptr);
   PARALLAX_CHECK_EQ(src.type(), CV_32F);
   PARALLAX_CHECK(dst->data == nullptr || dst->data != src.data);
-  const std::vector<float> half = GaussianHalfKernel(sigma);
-  const int radius = static_cast<int>(half.size()) - 1;
-  const int taps = 2 * radius + 1;
-  std::vector<Float8> half_taps(half.size());
-  for (size_t i = 0; i < half.size(); ++i) half_taps[i] = Float8{} + half[i];
-  // The whole kernel, with the zeros VerticalStep reads on either side.
-  std::vector<float> padded_kernel(taps + 2 * (kRowsPerStep - 1), 0.0f);
-  float* kernel = padded_kernel.data() + kRowsPerStep - 1;
-  for (int j = 0; j < taps; ++j) kernel[j] = half[std::abs(j - radius)];
-  const int rows = src.rows, cols = src.cols;
+  WindowedGaussianBlur blur(src, sigma);
   dst->create(src.size(), CV_32F);
-  if (src.empty()) return;
-
-  // The vertical pass's rows, each padded by `radius` replicated samples on each side (past
-  // the last row, the step's rows are made from clamped inputs and dropped).
-  const int stride = cols + 2 * radius;
-  std::vector<float> vertical(kRowsPerStep * static_cast<size_t>(stride));
-  std::vector<const float*> inputs(taps + kRowsPerStep - 1);
-  std::array<float*, kRowsPerStep> vertical_rows;
-  for (int q = 0; q < kRowsPerStep; ++q) vertical_rows[q] = vertical.data() + q * stride + radius;
-  for (int r = 0; r < rows; r += kRowsPerStep) {
-    for (int j = 0; j < static_cast<int>(inputs.size()); ++j) {
-      inputs[j] = src.ptr<float>(std::clamp(r - radius + j, 0, rows - 1));
-    }
-    VerticalStep(inputs.data(), kernel, taps, cols, vertical_rows.data());
-    for (int q = 0; q < kRowsPerStep && r + q < rows; ++q) {
-      float* row = vertical_rows[q];
-      std::fill(row - radius, row, row[0]);
-      std::fill(row + cols, row + cols + radius, row[cols - 1]);
-      HorizontalRow(row, half_taps.data(), radius, cols, dst->ptr<float>(r + q));
-      if (row_done) row_done(r + q);
-    }
-  }
+  blur.Blur(cv::Rect(cv::Point(0, 0), src.size()), dst, row_done);
 }
 
 }  // namespace parallax

@@ -4,6 +4,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "parallax/feature/float8.h"
+
 namespace parallax {
 
 // Taps of the Gaussian kernel GaussianBlur uses for `sigma`: OpenCV's for float images
@@ -22,5 +24,25 @@ std::vector<float> GaussianHalfKernel(double sigma);
 // the same row of `src`, which the vertical pass has just read).
 void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst,
                   const std::function<void(int row)>& row_done = nullptr);
+
+// GaussianBlur's values inside chosen windows of the image alone, the same floats, for an image
+// of which only a few samples are read. Keeps a reference to `src`'s data.
+class WindowedGaussianBlur {
+ public:
+  WindowedGaussianBlur(const cv::Mat& src, double sigma);
+
+  // Writes (*dst)(window) as GaussianBlur(src, sigma, dst) would, and nothing else of `dst`,
+  // which has src's size and type and does not share its data. `row_done` as for GaussianBlur,
+  // with the window's rows.
+  void Blur(cv::Rect window, cv::Mat* dst, const std::function<void(int row)>& row_done = nullptr);
+
+ private:
+  cv::Mat src_;
+  int radius_ = 0;
+  std::vector<Float8> half_taps_;     // Centre first, each broadcast to a vector.
+  std::vector<float> padded_kernel_;  // All taps, with zeros on either side.
+  std::vector<float> vertical_;       // The vertical pass's rows.
+  std::vector<const float*> inputs_;  // The input rows of one vertical step.
+};
 
 }  // namespace parallax

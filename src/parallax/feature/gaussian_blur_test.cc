@@ -95,6 +95,50 @@ TEST(GaussianBlur, ReportsEachRowInOrderOnceItIsWritten) {
   EXPECT_EQ(cv::norm(seen, blurred, cv::NORM_INF), 0.0);
 }
 
+// Every window, at the borders and inside, narrow and wide, gets exactly the full blur's
+// floats, and nothing outside it is written.
+TEST(WindowedGaussianBlur, WritesTheFullBlursFloatsInTheWindowAlone) {
+  const std::vector<cv::Size> sizes = {{640, 480}, {97, 33}, {31, 64}, {17, 7}, {5, 3}};
+  uint64_t seed = 21;
+  for (const cv::Size& size : sizes) {
+    const cv::Mat image = RandomImage(size.width, size.height, seed++);
+    cv::RNG rng(seed++);
+    for (const double sigma : {0.3, 1.23, 3.09}) {
+      cv::Mat full;
+      GaussianBlur(image, sigma, &full);
+      WindowedGaussianBlur windowed(image, sigma);
+      for (int trial = 0; trial < 20; ++trial) {
+        // 3 x 3 windows (what the native SIFT asks for), then any.
+        const int width = trial < 10 ? std::min(3, size.width) : rng.uniform(1, size.width + 1);
+        const int height = trial < 10 ? std::min(3, size.height) : rng.uniform(1, size.height + 1);
+        const cv::Rect window(rng.uniform(0, size.width - width + 1),
+                              rng.uniform(0, size.height - height + 1), width, height);
+        cv::Mat blurred(image.size(), CV_32F, cv::Scalar(-1));
+        std::vector<int> reported;
+        windowed.Blur(window, &blurred, [&](int row) { reported.push_back(row); });
+        cv::Mat expected(image.size(), CV_32F, cv::Scalar(-1));
+        full(window).copyTo(expected(window));
+        ASSERT_EQ(cv::norm(blurred, expected, cv::NORM_INF), 0.0)
+            << size.width << "x" << size.height << " sigma " << sigma << " window " << window;
+        std::vector<int> rows(window.height);
+        std::iota(rows.begin(), rows.end(), window.y);
+        EXPECT_EQ(reported, rows);
+      }
+    }
+  }
+}
+
+TEST(WindowedGaussianBlur, RejectsWindowsOutsideTheImageAndItsInputAsOutput) {
+  cv::Mat image = RandomImage(20, 10, 5);
+  WindowedGaussianBlur windowed(image, 1.6);
+  cv::Mat blurred(image.size(), CV_32F);
+  EXPECT_THROW(windowed.Blur(cv::Rect(18, 0, 3, 3), &blurred), CheckError);
+  EXPECT_THROW(windowed.Blur(cv::Rect(0, -1, 3, 3), &blurred), CheckError);
+  EXPECT_THROW(windowed.Blur(cv::Rect(0, 0, 3, 3), &image), CheckError);
+  cv::Mat small(5, 5, CV_32F);
+  EXPECT_THROW(windowed.Blur(cv::Rect(0, 0, 3, 3), &small), CheckError);
+}
+
 TEST(GaussianBlur, RejectsItsInputAsOutputAndOtherTypes) {
   cv::Mat image = RandomImage(20, 10, 3);
   EXPECT_THROW(GaussianBlur(image, 1.6, &image), CheckError);
