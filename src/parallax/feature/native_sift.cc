@@ -284,7 +284,7 @@ void PrepareScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, Sc
 // Builds octave o (after o - 1): layer k has sigma * 2^(k / S) in the octave's pixels, each
 // layer blurred from the one below it, and the octave starts from the previous one's layer S
 // (twice its first layer's blur) sampled at every other pixel. Calls layer_row_done(k, r) as
-// row r of layer k >= 1 is written.
+// row r of layer k >= 1 is written. The last layer, S + 2, is left to LastLayer.
 void BuildOctave(int o, ScaleSpace* space,
                  const std::function<void(int layer, int row)>& layer_row_done) {
   Octave& octave = space->octaves[o];
@@ -298,7 +298,7 @@ void BuildOctave(int o, ScaleSpace* space,
     cv::resize(previous, octave.gaussians[0], cv::Size(previous.cols / 2, previous.rows / 2), 0, 0,
                cv::INTER_NEAREST);
   }
-  for (int k = 1; k < num_layers; ++k) {
+  for (int k = 1; k + 1 < num_layers; ++k) {
     GaussianBlur(octave.gaussians[k - 1], space->increments[k], &octave.gaussians[k],
                  [&](int row) { layer_row_done(k, row); });
   }
@@ -326,6 +326,33 @@ class Differences {
   const std::vector<cv::Mat>& gaussians_;
 };
 
+// The last Gaussian layer of an octave, S + 2, enters only difference S + 1, which is read only
+// around the samples of difference S that pass the screen: by the test across scales and by
+// the extremum's refinement, 3 x 3 samples at a time. It is blurred there alone, the floats a
+// blur of the whole layer writes: that blur, the widest of the octave's, was a quarter of them.
+class LastLayer {
+ public:
+  LastLayer(const std::vector<cv::Mat>& gaussians, double increment)
+      : last_(gaussians.back()),
+        blur_(gaussians[gaussians.size() - 2], increment),
+        last_difference_(static_cast<int>(gaussians.size()) - 2) {}
+
+  // Before difference `layer` is read in the 3 x 3 samples around (r, c), one sample or more
+  // inside the octave's edges.
+  void PrepareAround(int layer, int r, int c) {
+    if (layer != last_difference_ || (r == row_ && c == col_)) return;
+    blur_.Blur(cv::Rect(c - 1, r - 1, 3, 3), &last_);
+    row_ = r;
+    col_ = c;
+  }
+
+ private:
+  cv::Mat last_;  // Shares the octave's layer.
+  WindowedGaussianBlur blur_;
+  const int last_difference_;
+  int row_ = -1, col_ = -1;  // Where it was made last.
+};
+
 // An extremum refined to sub-sample precision in (column, row, layer).
 struct Extremum {
   int layer = 0, row = 0, col = 0;
@@ -336,7 +363,8 @@ struct Extremum {
 // Whether the sample is at least as large (positive) or as small (negative) as its 18
 // neighbours in the layers above and below. ScreenRow has already compared it with the 8 in
 // its own layer: together, Lowe's 26-neighbour test.
-bool IsExtremumAcrossScales(const Differences& dogs, int layer, int r, int c) {
+bool IsExtremumAcrossScales(const Differences& dogs, int layer, int r, int c,
+                            LastLayer* last_layer) {
   const float value = dogs.At(layer, r, c);
   const auto beaten_in = [&](int other) {
     for (int rr = r - 1; rr <= r + 1; ++rr) {
@@ -347,7 +375,9 @@ bool IsExtremumAcrossScales(const Differences& dogs, int layer, int r, int c) {
     }
     return false;
   };
-  return !beaten_in(layer - 1) && !beaten_in(layer + 1);
+  if (beaten_in(layer - 1)) return false;
+  last_layer->PrepareAround(layer + 1, r, c);
+  return !beaten_in(layer + 1);
 }
 
 // Ternaries, not std::max/min, which the compiler does not turn into vector max/min.
@@ -484,7 +514,8 @@ DogDerivatives DerivativesAt(const Differences& dogs, int layer, int r, int c) {
 // it (VLFeat's rule: the layer stays), fitting up to five samples; the last fit is always
 // at the sample it ends on. False when that fit is 1.5 samples or more away, outside the
 // octave's scales, of low contrast, or on an edge.
-bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options, Extremum* extremum) {
+bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options,
+                    LastLayer* last_layer, Extremum* extremum) {
   const int layers = options.num_octave_layers;
   const int rows = dogs.rows(), cols = dogs.cols();
   const int layer = extremum->layer;
@@ -492,6 +523,7 @@ bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options, E
   DogDerivatives d;
   float offset[3] = {0, 0, 0};
   for (int fit = 1;; ++fit) {
+    last_layer->PrepareAround(layer + 1, r, c);
     d = DerivativesAt(dogs, layer, r, c);
     // Solve H offset = -gradient by Cramer's rule (H is 3x3 symmetric).
     const float c00 = d.dyy * d.dss - d.dys * d.dys, c01 = d.dxs * d.dys - d.dxy * d.dss,
@@ -897,11 +929,14 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
     BuildOctave(o, &space,
                 [&dog_screen](int layer, int row) { dog_screen.LayerRowDone(layer, row); });
     const Differences dogs(octave.gaussians);
+    LastLayer last_layer(octave.gaussians, space.increments.back());
     const float pixel_size = std::ldexp(1.0f, octave.index);
     for (const ScreenedSample& sample : dog_screen.samples()) {
-      if (!IsExtremumAcrossScales(dogs, sample.layer, sample.row, sample.col)) continue;
+      if (!IsExtremumAcrossScales(dogs, sample.layer, sample.row, sample.col, &last_layer)) {
+        continue;
+      }
       Extremum extremum{sample.layer, sample.row, sample.col};
-      if (!RefineExtremum(dogs, options, &extremum)) continue;
+      if (!RefineExtremum(dogs, options, &last_layer, &extremum)) continue;
       Detection& detection = extrema.emplace_back();
       detection.octave = o;
       detection.x = extremum.col + extremum.offset_col;
