@@ -131,6 +131,16 @@ void WindowedGaussianBlur::Blur(cv::Rect window, cv::Mat* dst,
   if (window.empty()) return;
   PARALLAX_CHECK(dst->data != src_.data);
   PARALLAX_CHECK(dst->size() == src_.size() && dst->type() == CV_32F);
+  Blur(window, dst->ptr<float>(window.y) + window.x, dst->step1(), row_done);
+}
+
+void WindowedGaussianBlur::Blur(cv::Rect window, float* out, size_t out_stride,
+                                const std::function<void(int row)>& row_done) {
+  PARALLAX_CHECK((window & cv::Rect(cv::Point(0, 0), src_.size())) == window);
+  if (window.empty()) return;
+  PARALLAX_CHECK(out != nullptr && out_stride >= static_cast<size_t>(window.width));
+  const auto* out_bytes = reinterpret_cast<const uchar*>(out);
+  PARALLAX_CHECK(out_bytes < src_.datastart || out_bytes >= src_.dataend);
   const int rows = src_.rows, cols = src_.cols, radius = radius_;
   const int taps = 2 * radius + 1;
   const float* kernel = padded_kernel_.data() + kRowsPerStep - 1;
@@ -167,7 +177,7 @@ void WindowedGaussianBlur::Blur(cv::Rect window, cv::Mat* dst,
       for (int x = window.x - radius; x < 0; ++x) row[x - low] = row[-low];
       for (int x = cols; x < window_end_col + radius; ++x) row[x - low] = row[cols - 1 - low];
       HorizontalRow(row + (window.x - low), half_taps_.data(), radius, window.width,
-                    dst->ptr<float>(r + q) + window.x);
+                    out + (r + q - window.y) * out_stride);
       if (row_done) row_done(r + q);
     }
   }

@@ -35,6 +35,10 @@ class WindowedGaussianBlur {
   // which has src's size and type and does not share its data. `row_done` as for GaussianBlur,
   // with the window's rows.
   void Blur(cv::Rect window, cv::Mat* dst, const std::function<void(int row)>& row_done = nullptr);
+  // The same into a buffer of the window's own: sample (x, y) of the window at
+  // out[(y - window.y) * out_stride + x - window.x].
+  void Blur(cv::Rect window, float* out, size_t out_stride,
+            const std::function<void(int row)>& row_done = nullptr);
 
  private:
   cv::Mat src_;

@@ -128,6 +128,26 @@ TEST(WindowedGaussianBlur, WritesTheFullBlursFloatsInTheWindowAlone) {
   }
 }
 
+// Into a buffer of the window's own: the same floats, rows out_stride apart.
+TEST(WindowedGaussianBlur, WritesAWindowIntoABufferOfItsOwn) {
+  const cv::Mat image = RandomImage(150, 90, 31);
+  cv::Mat full;
+  GaussianBlur(image, 3.09, &full);
+  WindowedGaussianBlur windowed(image, 3.09);
+  for (const cv::Rect window : {cv::Rect(0, 0, 3, 3), cv::Rect(70, 40, 3, 3),
+                                cv::Rect(147, 87, 3, 3), cv::Rect(10, 5, 40, 9)}) {
+    constexpr size_t kStride = 41;
+    std::vector<float> out(kStride * window.height + 1, -1.0f);
+    windowed.Blur(window, out.data(), kStride);
+    for (int y = 0; y < window.height; ++y) {
+      for (int x = 0; x < window.width; ++x) {
+        ASSERT_EQ(out[y * kStride + x], full.at<float>(window.y + y, window.x + x)) << window;
+      }
+      for (size_t x = window.width; x < kStride; ++x) EXPECT_EQ(out[y * kStride + x], -1.0f);
+    }
+  }
+}
+
 TEST(WindowedGaussianBlur, RejectsWindowsOutsideTheImageAndItsInputAsOutput) {
   cv::Mat image = RandomImage(20, 10, 5);
   WindowedGaussianBlur windowed(image, 1.6);
@@ -135,6 +155,9 @@ TEST(WindowedGaussianBlur, RejectsWindowsOutsideTheImageAndItsInputAsOutput) {
   EXPECT_THROW(windowed.Blur(cv::Rect(18, 0, 3, 3), &blurred), CheckError);
   EXPECT_THROW(windowed.Blur(cv::Rect(0, -1, 3, 3), &blurred), CheckError);
   EXPECT_THROW(windowed.Blur(cv::Rect(0, 0, 3, 3), &image), CheckError);
+  EXPECT_THROW(windowed.Blur(cv::Rect(0, 0, 3, 3), image.ptr<float>(4), 3), CheckError);
+  std::vector<float> narrow(9);
+  EXPECT_THROW(windowed.Blur(cv::Rect(0, 0, 3, 3), narrow.data(), 2), CheckError);
   cv::Mat small(5, 5, CV_32F);
   EXPECT_THROW(windowed.Blur(cv::Rect(0, 0, 3, 3), &small), CheckError);
 }

@@ -52,9 +52,19 @@ struct Octave {
   std::vector<cv::Mat> gaussians;
 };
 
-// Gradient magnitude and angle (radians in [0, 2 pi)) of one Gaussian layer.
+// Gradient magnitude and angle (radians in [0, 2 pi)) of one Gaussian layer of rows x cols:
+// row r in row r & ring_mask of two rings of rows, which hold the rows that the frames being
+// described read (LayerGradient).
 struct Gradient {
-  cv::Mat magnitude, angle;
+  int rows = 0, cols = 0;
+  cv::Mat magnitude_ring, angle_ring;
+  int ring_mask = 0;
+
+  cv::Size size() const { return {cols, rows}; }
+  const float* Magnitude(int r) const { return magnitude_ring.ptr<float>(r & ring_mask); }
+  const float* Angle(int r) const { return angle_ring.ptr<float>(r & ring_mask); }
+  float* MutableMagnitude(int r) { return magnitude_ring.ptr<float>(r & ring_mask); }
+  float* MutableAngle(int r) { return angle_ring.ptr<float>(r & ring_mask); }
 };
 
 }  // namespace
@@ -71,7 +81,10 @@ struct NativeSiftScaleSpace {
   // Three rows of one difference of Gaussians and of their RowExtremes, where the extrema
   // screen reads them.
   std::vector<float> dog_rows;
-  cv::Mat magnitude_buffer, angle_buffer;
+  // The gradient's rings (Gradient), as wide as the first octave, of a power of two rows
+  // (fewer where the first octave has fewer rows).
+  cv::Mat magnitude_ring, angle_ring;
+  int ring_mask = 0;
   std::vector<float> dx_row, dy_row;  // One row of differences, before PolarRow.
   std::vector<float> samples;         // One row of a descriptor's samples.
   std::vector<int32_t> offsets;       // Their histogram cells (FrameDescriptor).
@@ -141,26 +154,32 @@ void PolarRow(const float* __restrict gx, const float* __restrict gy, int count,
 }
 
 // The gradient of one Gaussian layer, by central differences (zero on the one-pixel border),
-// in the corners of the shared buffers, computed only in `region` (elsewhere the buffers
-// hold whatever they held), band by band as the layer's frames reach them in scan order:
-// each band is read while it is still in cache, where a gradient computed for the whole
-// layer first came back from memory for every frame.
+// in the shared rings, computed only in `region` (elsewhere the rings hold whatever they
+// held), band by band as the layer's frames reach them in scan order: each band is read while
+// it is still in cache, where a gradient computed for the whole layer first came back from
+// memory for every frame. The rings hold the rows of the frames at hand, where whole images
+// of magnitude and angle were two more layers to fault in.
 class LayerGradient {
  public:
   LayerGradient(const cv::Mat& image, const GradientRegion& region, ScaleSpace* space)
       : image_(image),
         region_(region),
-        gradient_{space->magnitude_buffer(cv::Rect(cv::Point(0, 0), image.size())),
-                  space->angle_buffer(cv::Rect(cv::Point(0, 0), image.size()))},
+        gradient_{image.rows, image.cols, space->magnitude_ring, space->angle_ring,
+                  space->ring_mask},
         space_(space) {
-    space->dx_row.resize(space->magnitude_buffer.cols);
-    space->dy_row.resize(space->magnitude_buffer.cols);
+    space->dx_row.resize(space->magnitude_ring.cols);
+    space->dy_row.resize(space->magnitude_ring.cols);
   }
 
-  // The gradient, computed at least through row `last_row` of the region.
-  const Gradient& Through(int last_row) {
+  // The gradient, computed at least through row `last_row` of the region, for a frame that
+  // reads rows `first_row` to `last_row` (frames come in the order of their rows).
+  const Gradient& Through(int first_row, int last_row) {
     const int last_band = std::min(last_row / kGradientBandRows, region_.NumBands() - 1);
     for (; next_band_ <= last_band; ++next_band_) ComputeBand(next_band_);
+    // The ring still holds the frame's first row (GradientRingRows).
+    PARALLAX_CHECK_LE(
+        std::min(next_band_ * kGradientBandRows, image_.rows) - std::max(first_row, 0),
+        gradient_.magnitude_ring.rows);
     return gradient_;
   }
 
@@ -188,8 +207,7 @@ class LayerGradient {
         if (col_end == image_.cols) gx[image_.cols - 1] = gy[image_.cols - 1] = 0;
       }
       PolarRow(gx + col_begin, gy + col_begin, col_end - col_begin,
-               gradient_.magnitude.ptr<float>(r) + col_begin,
-               gradient_.angle.ptr<float>(r) + col_begin);
+               gradient_.MutableMagnitude(r) + col_begin, gradient_.MutableAngle(r) + col_begin);
     }
   }
 
@@ -200,30 +218,65 @@ class LayerGradient {
   int next_band_ = 0;
 };
 
+// Half-sides of the square of gradient samples around (round(x), round(y)) that a frame's
+// orientation histogram and its descriptor read.
+int OrientationRadius(float octave_scale) {
+  return std::max(1, static_cast<int>(std::lround(3.0f * kOrientationWindow * octave_scale)));
+}
+
+int DescriptorRadius(float octave_scale, cv::Size layer_size) {
+  const float bin_side = kDescriptorMagnification * octave_scale;
+  const int max_radius = static_cast<int>(std::sqrt(static_cast<float>(
+      layer_size.height * layer_size.height + layer_size.width * layer_size.width)));
+  return std::min(max_radius, static_cast<int>(std::lround(bin_side * std::sqrt(2.0f) *
+                                                           (kDescriptorGrid + 1) * 0.5f)));
+}
+
+// Half-side of the square of gradient samples a frame reads, for both.
+int GradientRadius(float octave_scale, cv::Size layer_size) {
+  return std::max(OrientationRadius(octave_scale), DescriptorRadius(octave_scale, layer_size));
+}
+
+// Rows of the gradient's rings: a frame reads at most 2 R + 1 rows, R the largest radius
+// (a frame of layer S + 1, the largest scale RefineExtremum keeps), and the band that
+// LayerGradient computes last for it may end R + kGradientBandRows - 1 rows below its centre,
+// while a later frame (further down) may read from R rows above its own.
+int GradientRingRows(const NativeSiftOptions& options, cv::Size base_size) {
+  const int layers = options.num_octave_layers;
+  const float largest_scale =
+      static_cast<float>(options.sigma * std::pow(2.0, (layers + 1.0f) / layers));
+  const int radius = GradientRadius(largest_scale, base_size);
+  return 2 * radius + kGradientBandRows + 1;
+}
+
 // Points every float image of the scale space (input, doubled input, each octave's
-// Gaussian layers, the gradient) into one huge-page block, laid out the same way for every
-// image of a size, so that the same pages serve image after image. Images used in
-// different phases share memory, which the first image of each thread pays to fault in:
-// the input and its doubled copy are read only by the first octave's first blur, before
-// its last two layers are written, and nothing reads an octave's last layer once its
-// differences are screened (frames are described on layers 0 to S + 1), so the gradient's
-// magnitude lies over the first octave's.
+// Gaussian layers, the gradient's rings) into one huge-page block, laid out the same way for
+// every image of a size, so that the same pages serve image after image. The first image of
+// each thread pays to fault them in, so images used in different phases share memory: the
+// input and its doubled copy are read only by the first octave's first blur, before layers
+// S and S + 1 are written over them. Layer S + 2 has no memory (LastLayer).
 void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOptions& options,
                    ScaleSpace* space) {
-  const int num_layers = options.num_octave_layers + 3;
+  const int layers = options.num_octave_layers;
   std::vector<std::pair<cv::Mat*, cv::Size>> layout;
   for (size_t o = 0; o < space->octaves.size(); ++o) {
     const cv::Size size(base_size.width >> o, base_size.height >> o);
-    space->octaves[o].gaussians.resize(num_layers);
-    for (cv::Mat& gaussian : space->octaves[o].gaussians) layout.emplace_back(&gaussian, size);
+    std::vector<cv::Mat>& gaussians = space->octaves[o].gaussians;
+    gaussians.assign(layers + 3, cv::Mat());
+    for (int k = 0; k <= layers + 1; ++k) layout.emplace_back(&gaussians[k], size);
   }
-  layout.emplace_back(&space->angle_buffer, base_size);
+  const int ring_rows =
+      static_cast<int>(std::bit_ceil(static_cast<unsigned>(GradientRingRows(options, base_size))));
+  space->ring_mask = ring_rows - 1;
+  // A layer of fewer rows has each in a row of its own (r & ring_mask == r).
+  const cv::Size ring_size(base_size.width, std::min(ring_rows, base_size.height));
+  layout.emplace_back(&space->magnitude_ring, ring_size);
+  layout.emplace_back(&space->angle_ring, ring_size);
   // An image too small for one octave has no layers to share.
   const bool shared = !space->octaves.empty();
   if (!shared) {
     layout.emplace_back(&space->input, input_size);
     layout.emplace_back(&space->doubled, base_size);
-    layout.emplace_back(&space->magnitude_buffer, base_size);
   }
 
   constexpr size_t kAlignment = 64;
@@ -241,9 +294,8 @@ void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOpti
   }
   if (!shared) return;
   const std::vector<cv::Mat>& first = space->octaves.front().gaussians;
-  space->input = cv::Mat(input_size, CV_32F, first[num_layers - 2].data);
-  space->doubled = cv::Mat(base_size, CV_32F, first[num_layers - 1].data);
-  space->magnitude_buffer = cv::Mat(base_size, CV_32F, first[num_layers - 1].data);
+  space->input = cv::Mat(input_size, CV_32F, first[layers].data);
+  space->doubled = cv::Mat(base_size, CV_32F, first[layers + 1].data);
 }
 
 // The base image of the scale space (the input as floats in [0, 1], doubled for octave -1)
@@ -304,17 +356,56 @@ void BuildOctave(int o, ScaleSpace* space,
   }
 }
 
+// The last Gaussian layer of an octave, S + 2, enters only difference S + 1, which is read only
+// around the samples of difference S that pass the screen: by the test across scales and by
+// the extremum's refinement, 3 x 3 samples at a time. It is blurred there alone, into a window
+// of its own, the floats a blur of the whole layer writes: that blur, the widest of the
+// octave's, was a quarter of them, and the layer another image to fault in.
+class LastLayer {
+ public:
+  LastLayer(const std::vector<cv::Mat>& gaussians, double increment)
+      : blur_(gaussians[gaussians.size() - 2], increment),
+        last_difference_(static_cast<int>(gaussians.size()) - 2) {}
+
+  int last_difference() const { return last_difference_; }
+
+  // Before difference `layer` is read in the 3 x 3 samples around (r, c), one sample or more
+  // inside the octave's edges.
+  void PrepareAround(int layer, int r, int c) {
+    if (layer != last_difference_ || (r == row_ && c == col_)) return;
+    blur_.Blur(cv::Rect(c - 1, r - 1, kSide, kSide), window_.data(), kSide);
+    row_ = r;
+    col_ = c;
+  }
+
+  // The layer at (r, c), within a sample of where it was last prepared.
+  float At(int r, int c) const { return window_[(r - row_ + 1) * kSide + (c - col_ + 1)]; }
+
+ private:
+  static constexpr int kSide = 3;
+  WindowedGaussianBlur blur_;
+  const int last_difference_;
+  std::array<float, kSide * kSide> window_{};
+  int row_ = -1, col_ = -1;  // Where it was prepared last.
+};
+
 // The differences of Gaussians of one octave, read from its layers where they are needed:
 // difference k is layer k + 1 minus layer k, the float a blur storing it would have stored.
 // Kept in buffers of their own, they were five more images per thread to fault in and five
 // more streams of stores per octave.
 class Differences {
  public:
-  explicit Differences(const std::vector<cv::Mat>& gaussians) : gaussians_(gaussians) {}
+  // Difference S + 1 is read through `last_layer`, and only where it was prepared; without
+  // one, only differences 0 to S are read.
+  explicit Differences(const std::vector<cv::Mat>& gaussians, const LastLayer* last_layer = nullptr)
+      : gaussians_(gaussians), last_layer_(last_layer) {}
   int rows() const { return gaussians_[0].rows; }
   int cols() const { return gaussians_[0].cols; }
   float At(int layer, int r, int c) const {
-    return gaussians_[layer + 1].ptr<float>(r)[c] - gaussians_[layer].ptr<float>(r)[c];
+    const float upper = last_layer_ != nullptr && layer == last_layer_->last_difference()
+                            ? last_layer_->At(r, c)
+                            : gaussians_[layer + 1].ptr<float>(r)[c];
+    return upper - gaussians_[layer].ptr<float>(r)[c];
   }
   void Row(int layer, int r, float* __restrict out) const {
     const float* __restrict upper = gaussians_[layer + 1].ptr<float>(r);
@@ -324,33 +415,7 @@ class Differences {
 
  private:
   const std::vector<cv::Mat>& gaussians_;
-};
-
-// The last Gaussian layer of an octave, S + 2, enters only difference S + 1, which is read only
-// around the samples of difference S that pass the screen: by the test across scales and by
-// the extremum's refinement, 3 x 3 samples at a time. It is blurred there alone, the floats a
-// blur of the whole layer writes: that blur, the widest of the octave's, was a quarter of them.
-class LastLayer {
- public:
-  LastLayer(const std::vector<cv::Mat>& gaussians, double increment)
-      : last_(gaussians.back()),
-        blur_(gaussians[gaussians.size() - 2], increment),
-        last_difference_(static_cast<int>(gaussians.size()) - 2) {}
-
-  // Before difference `layer` is read in the 3 x 3 samples around (r, c), one sample or more
-  // inside the octave's edges.
-  void PrepareAround(int layer, int r, int c) {
-    if (layer != last_difference_ || (r == row_ && c == col_)) return;
-    blur_.Blur(cv::Rect(c - 1, r - 1, 3, 3), &last_);
-    row_ = r;
-    col_ = c;
-  }
-
- private:
-  cv::Mat last_;  // Shares the octave's layer.
-  WindowedGaussianBlur blur_;
-  const int last_difference_;
-  int row_ = -1, col_ = -1;  // Where it was made last.
+  const LastLayer* const last_layer_;
 };
 
 // An extremum refined to sub-sample precision in (column, row, layer).
@@ -567,25 +632,6 @@ bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options,
   return true;
 }
 
-// Half-sides of the square of gradient samples around (round(x), round(y)) that a frame's
-// orientation histogram and its descriptor read.
-int OrientationRadius(float octave_scale) {
-  return std::max(1, static_cast<int>(std::lround(3.0f * kOrientationWindow * octave_scale)));
-}
-
-int DescriptorRadius(float octave_scale, cv::Size layer_size) {
-  const float bin_side = kDescriptorMagnification * octave_scale;
-  const int max_radius = static_cast<int>(std::sqrt(static_cast<float>(
-      layer_size.height * layer_size.height + layer_size.width * layer_size.width)));
-  return std::min(max_radius, static_cast<int>(std::lround(bin_side * std::sqrt(2.0f) *
-                                                           (kDescriptorGrid + 1) * 0.5f)));
-}
-
-// Half-side of the square of gradient samples a frame reads, for both.
-int GradientRadius(float octave_scale, cv::Size layer_size) {
-  return std::max(OrientationRadius(octave_scale), DescriptorRadius(octave_scale, layer_size));
-}
-
 // Gaussian weights exp(-d^2 / (2 sigma^2)) for d = i - fraction, i = -radius..radius: a 2D
 // Gaussian window is the product of two of these. Three exponentials instead of 2 radius + 1:
 // neighbouring weights differ by the factor exp(-(2 d + 1) / (2 sigma^2)), which itself
@@ -627,8 +673,6 @@ void OrientationSamples(int count, const float* __restrict angle, const float* _
 // highest become orientations (interpolated by a parabola), strongest first.
 std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y, float octave_scale,
                                      int max_orientations, std::vector<float>* samples) {
-  const cv::Mat& magnitude = gradient.magnitude;
-  const cv::Mat& angle = gradient.angle;
   const float window_sigma = kOrientationWindow * octave_scale;
   const int radius = OrientationRadius(octave_scale);
   const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
@@ -646,17 +690,17 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
   float* sample_weight = sample_share + (2 * radius + 1);
   for (int dy = -radius; dy <= radius; ++dy) {
     const int r = yi + dy;
-    if (r < 1 || r >= magnitude.rows - 1) continue;
+    if (r < 1 || r >= gradient.rows - 1) continue;
     // The disc's columns on this row: dx^2 + dy^2 <= radius^2.
     const int reach_sq = radius * radius - dy * dy;
     int reach = static_cast<int>(std::sqrt(static_cast<double>(reach_sq)));
     while ((reach + 1) * (reach + 1) <= reach_sq) ++reach;
     while (reach * reach > reach_sq) --reach;
     const int c_begin = std::max(1, xi - reach);
-    const int c_end = std::min(magnitude.cols - 2, xi + reach);
+    const int c_end = std::min(gradient.cols - 2, xi + reach);
     const int count = c_end - c_begin + 1;
     if (count <= 0) continue;
-    OrientationSamples(count, angle.ptr<float>(r) + c_begin, magnitude.ptr<float>(r) + c_begin,
+    OrientationSamples(count, gradient.Angle(r) + c_begin, gradient.Magnitude(r) + c_begin,
                        weights_x.data() + (c_begin - xi + radius), weights_y[dy + radius],
                        sample_bin, sample_share, sample_weight);
     for (int i = 0; i < count; ++i) {
@@ -758,11 +802,9 @@ void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float 
 void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_scale,
                      float orientation, std::vector<float>* samples, std::vector<int32_t>* offsets,
                      float* descriptor) {
-  const cv::Mat& magnitude = gradient.magnitude;
-  const cv::Mat& angle = gradient.angle;
   const float bin_side = kDescriptorMagnification * octave_scale;
   const float half_grid = 0.5f * kDescriptorGrid;
-  const int radius = DescriptorRadius(octave_scale, magnitude.size());
+  const int radius = DescriptorRadius(octave_scale, gradient.size());
   const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
   std::vector<float> weights_x, weights_y;
   GaussianWeights(radius, x - xi, half_grid * bin_side, &weights_x);
@@ -780,9 +822,9 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
   const Float8 zero = {}, one = zero + 1.0f, num_bins = zero + kDescriptorOrientations;
   for (int dy = -radius; dy <= radius; ++dy) {
     const int r = yi + dy;
-    if (r < 1 || r >= magnitude.rows - 1) continue;
-    const float* mag_row = magnitude.ptr<float>(r);
-    const float* ang_row = angle.ptr<float>(r);
+    if (r < 1 || r >= gradient.rows - 1) continue;
+    const float* mag_row = gradient.Magnitude(r);
+    const float* ang_row = gradient.Angle(r);
     const float oy = static_cast<float>(r) - y;
     const float weight_y = weights_y[dy + radius];
     // The columns whose samples fall in the rotated window: |u|, |v| < half_grid + 0.5 bins,
@@ -805,7 +847,7 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
     if (ox_low > ox_high) continue;
     const int c_begin = std::max({1, xi - radius, static_cast<int>(std::floor(x + ox_low))});
     const int c_end =
-        std::min({magnitude.cols - 2, xi + radius, static_cast<int>(std::ceil(x + ox_high))});
+        std::min({gradient.cols - 2, xi + radius, static_cast<int>(std::ceil(x + ox_high))});
     // First the bins and weights of the row's samples, in a loop without branches that
     // the compiler vectorises; then their adds, which cannot be.
     const int count = c_end - c_begin + 1;
@@ -928,8 +970,8 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
     DogScreen dog_screen(octave.gaussians, layers, screen, &space);
     BuildOctave(o, &space,
                 [&dog_screen](int layer, int row) { dog_screen.LayerRowDone(layer, row); });
-    const Differences dogs(octave.gaussians);
     LastLayer last_layer(octave.gaussians, space.increments.back());
+    const Differences dogs(octave.gaussians, &last_layer);
     const float pixel_size = std::ldexp(1.0f, octave.index);
     for (const ScreenedSample& sample : dog_screen.samples()) {
       if (!IsExtremumAcrossScales(dogs, sample.layer, sample.row, sample.col, &last_layer)) {
@@ -945,8 +987,8 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
       detection.octave_scale =
           static_cast<float>(options.sigma * std::pow(2.0, layer_position / layers));
       // Orientation and descriptor are measured on the Gaussian layer nearest in scale: 0 to
-      // S + 1, since RefineExtremum keeps layer_position in [0, S + 1] (the last layer's
-      // memory holds the gradient meanwhile, see LayOutBuffers).
+      // S + 1, since RefineExtremum keeps layer_position in [0, S + 1] (layer S + 2 is
+      // never stored, see LastLayer).
       detection.layer = std::clamp(static_cast<int>(std::lround(layer_position)), 0, layers + 1);
       detection.frame.x = pixel_size * detection.x + origin;
       detection.frame.y = pixel_size * detection.y + origin;
@@ -963,8 +1005,9 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
     extrema.resize(options.max_num_features);
   }
 
-  // 3. Orientations and descriptors, one Gaussian layer at a time in scan order, so that one
-  // gradient image is held at a time and frames near each other share its cache lines.
+  // 3. Orientations and descriptors, one Gaussian layer at a time in scan order, so that the
+  // gradient's rings hold the rows of one layer's frames at hand, and frames near each other
+  // share their cache lines.
   std::stable_sort(extrema.begin(), extrema.end(), [](const Detection& a, const Detection& b) {
     if (a.octave != b.octave) return a.octave < b.octave;
     if (a.layer != b.layer) return a.layer < b.layer;
@@ -990,8 +1033,8 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
     for (size_t i = begin; i < end; ++i) {
       const Detection& extremum = extrema[i];
       const int radius = GradientRadius(extremum.octave_scale, layer.size());
-      const Gradient& gradient =
-          layer_gradient.Through(static_cast<int>(std::lround(extremum.y)) + radius);
+      const int yi = static_cast<int>(std::lround(extremum.y));
+      const Gradient& gradient = layer_gradient.Through(yi - radius, yi + radius);
       for (const float orientation :
            FrameOrientations(gradient, extremum.x, extremum.y, extremum.octave_scale,
                              options.max_num_orientations, &space.samples)) {

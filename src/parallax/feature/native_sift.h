@@ -38,8 +38,9 @@ struct SiftFrame {
 // then x), scale and orientation, so that the order is total and never a scan's.
 bool FrameRanksBefore(const SiftFrame& a, const SiftFrame& b);
 
-// The scale space and scratch one extraction works in (about 20 float layers the size of the
-// first octave). Defined in native_sift.cc.
+// The scale space and scratch one extraction works in (S + 2 float layers the size of the
+// first octave, a third as much for the other octaves, and rings of gradient rows). Defined in
+// native_sift.cc.
 struct NativeSiftScaleSpace;
 
 // Buffers for ComputeNativeSift: passing the same object to successive calls reuses them,
