@@ -7,13 +7,13 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <utility>
 #include <vector>
 
 #include "parallax/feature/float8.h"
 #include "parallax/feature/gaussian_blur.h"
+#include "parallax/feature/resample.h"
 #include "parallax/util/check.h"
 #include "parallax/util/huge_page_buffer.h"
 
@@ -318,7 +318,7 @@ void PrepareScaleSpace(const cv::Mat& gray, const NativeSiftOptions& options, Sc
   double input_blur = 0.5;
   space->first_octave = 0;
   if (options.double_first_octave) {
-    cv::resize(space->input, space->doubled, base_size, 0, 0, cv::INTER_LINEAR);
+    UpsampleTwice(space->input, &space->doubled);
     space->base = space->doubled;
     input_blur = 1.0;
     space->first_octave = -1;
@@ -347,8 +347,7 @@ void BuildOctave(int o, ScaleSpace* space,
     GaussianBlur(space->base, space->first_blur, &octave.gaussians[0]);
   } else {
     const cv::Mat& previous = space->octaves[o - 1].gaussians[num_layers - 3];
-    cv::resize(previous, octave.gaussians[0], cv::Size(previous.cols / 2, previous.rows / 2), 0, 0,
-               cv::INTER_NEAREST);
+    SampleEveryOther(previous, &octave.gaussians[0]);
   }
   for (int k = 1; k + 1 < num_layers; ++k) {
     GaussianBlur(octave.gaussians[k - 1], space->increments[k], &octave.gaussians[k],
