@@ -482,6 +482,9 @@ void ScreenRow(const float* __restrict row, const float* __restrict largest_abov
   int c = 1;
   for (; c + 8 <= cols - 1; c += 8) {
     const Float8 v = Load8(row + c);
+    // Most samples are below the screen (the whole of a plain background): their neighbours
+    // are not loaded.
+    if (MoveMask8((v > above_screen) | (v < below_screen)) == 0) continue;
     const Float8 around_max =
         Max8(Max8(Load8(largest_above + c), Load8(largest_at + c)), Load8(largest_below + c));
     const Float8 around_min =

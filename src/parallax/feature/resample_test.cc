@@ -13,8 +13,8 @@ namespace {
 // column, and one pixel.
 TEST(UpsampleTwice, IsOpenCvsBilinearResizeBitForBit) {
   uint64_t seed = 1;
-  for (const cv::Size size : {cv::Size(640, 480), cv::Size(97, 33), cv::Size(5, 3),
-                              cv::Size(1, 7), cv::Size(9, 1), cv::Size(1, 1)}) {
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(97, 33), cv::Size(5, 3), cv::Size(1, 7),
+                              cv::Size(9, 1), cv::Size(1, 1)}) {
     cv::Mat image(size, CV_32F);
     cv::RNG rng(seed++);
     rng.fill(image, cv::RNG::UNIFORM, 0.0f, 1.0f);
@@ -50,7 +50,8 @@ TEST(SampleEveryOther, IsOpenCvsNearestResizeToHalfTheSize) {
   cv::Mat image(70, 91, CV_32F);
   cv::RNG rng(5);
   rng.fill(image, cv::RNG::UNIFORM, 0.0f, 1.0f);
-  for (const cv::Rect view : {cv::Rect(0, 0, 91, 70), cv::Rect(3, 2, 51, 33), cv::Rect(1, 1, 3, 2)}) {
+  for (const cv::Rect view :
+       {cv::Rect(0, 0, 91, 70), cv::Rect(3, 2, 51, 33), cv::Rect(1, 1, 3, 2)}) {
     const cv::Mat src = image(view);
     cv::Mat expected, sampled;
     cv::resize(src, expected, cv::Size(src.cols / 2, src.rows / 2), 0, 0, cv::INTER_NEAREST);
