@@ -717,14 +717,15 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
     histogram[b] = padded[b + 1] + padded[kPaddedBins + b + 1];
   histogram[kOrientationBins - 1] += padded[0] + padded[kPaddedBins];
   histogram[0] += padded[kPaddedBins - 1] + padded[2 * kPaddedBins - 1];
+  // Each pass from a copy with the ends wrapped, which the compiler vectorises: in place,
+  // each bin waited for the one before (and its division).
+  std::array<float, kOrientationBins + 2> wrapped;
   for (int pass = 0; pass < kOrientationSmoothing; ++pass) {
-    const float first = histogram[0];
-    float previous = histogram[kOrientationBins - 1];
+    wrapped[0] = histogram[kOrientationBins - 1];
+    std::copy(histogram.begin(), histogram.end(), wrapped.begin() + 1);
+    wrapped[kOrientationBins + 1] = histogram[0];
     for (int b = 0; b < kOrientationBins; ++b) {
-      const float current = histogram[b];
-      const float next = b + 1 < kOrientationBins ? histogram[b + 1] : first;
-      histogram[b] = (previous + current + next) / 3.0f;
-      previous = current;
+      histogram[b] = (wrapped[b] + wrapped[b + 1] + wrapped[b + 2]) / 3.0f;
     }
   }
   const float highest = *std::max_element(histogram.begin(), histogram.end());
