@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <cstring>
 
-#if defined(__AVX__)
+#if defined(__SSE__)
 #include <immintrin.h>
 #endif
 
@@ -15,6 +15,9 @@ namespace parallax {
 // each is two SSE registers.
 typedef float Float8 __attribute__((vector_size(32)));
 typedef int32_t Int8 __attribute__((vector_size(32)));
+// And four, one SSE register.
+typedef float Float4 __attribute__((vector_size(16)));
+typedef int32_t Int4 __attribute__((vector_size(16)));
 
 inline Float8 Load8(const float* p) {
   Float8 v;
@@ -23,6 +26,12 @@ inline Float8 Load8(const float* p) {
 }
 
 inline void Store8(float* p, Float8 v) { std::memcpy(p, &v, sizeof(v)); }
+
+inline Float4 Load4(const float* p) {
+  Float4 v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
 
 // |v|, by clearing the sign bits: one AND (GCC makes a negation and a blend of v < 0 ? -v : v).
 inline Float8 Abs8(Float8 v) {
@@ -76,6 +85,17 @@ inline uint32_t MoveMask8(Int8 mask) {
 #else
   uint32_t bits = 0;
   for (int i = 0; i < 8; ++i) bits |= static_cast<uint32_t>(mask[i] != 0) << i;
+  return bits;
+#endif
+}
+
+// Bit i set where lane i of `mask` is set.
+inline uint32_t MoveMask4(Int4 mask) {
+#if defined(__SSE__)
+  return static_cast<uint32_t>(_mm_movemask_ps(reinterpret_cast<__m128>(mask)));
+#else
+  uint32_t bits = 0;
+  for (int i = 0; i < 4; ++i) bits |= static_cast<uint32_t>(mask[i] != 0) << i;
   return bits;
 #endif
 }
