@@ -493,15 +493,15 @@ void ScreenRow(const float* __restrict row, const float* __restrict largest_abov
   int c = 1;
   for (; c + 8 <= cols - 1; c += 8) {
     const Float8 v = Load8(row + c);
+    const Int8 above = v > above_screen, below = v < below_screen;
     // Most samples are below the screen (the whole of a plain background): their neighbours
     // are not loaded.
-    if (MoveMask8((v > above_screen) | (v < below_screen)) == 0) continue;
+    if (MoveMask8(above | below) == 0) continue;
     const Float8 around_max =
         Max8(Max8(Load8(largest_above + c), Load8(largest_at + c)), Load8(largest_below + c));
     const Float8 around_min =
         Min8(Min8(Load8(smallest_above + c), Load8(smallest_at + c)), Load8(smallest_below + c));
-    const Int8 hits =
-        ((v > above_screen) & (v >= around_max)) | ((v < below_screen) & (v <= around_min));
+    const Int8 hits = (above & (v >= around_max)) | (below & (v <= around_min));
     for (uint32_t mask = MoveMask8(hits); mask != 0; mask &= mask - 1) {
       samples->push_back({layer, r, c + std::countr_zero(mask)});
     }
