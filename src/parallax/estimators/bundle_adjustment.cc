@@ -49,6 +49,7 @@ void BundleAdjustmentOptions::Check() const {
   PARALLAX_CHECK_GE(function_tolerance, 0.0);
   PARALLAX_CHECK_GE(gradient_tolerance, 0.0);
   PARALLAX_CHECK_GE(parameter_tolerance, 0.0);
+  PARALLAX_CHECK_GE(camera_step_tolerance, 0.0);
   PARALLAX_CHECK(num_threads == -1 || num_threads > 0);
 }
 

@@ -42,6 +42,12 @@ struct BundleAdjustmentOptions {
   double function_tolerance = 1e-6;
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-8;
+  // Parallax's Schur LM (Ceres ignores it) also stops once an accepted step moves no camera
+  // by more than this (0: never): rotations in radians, translations over the spread of the
+  // camera centres, free intrinsics relative to their value (or to 1 when smaller). Under a
+  // robust loss the points keep creeping long after the cameras have settled (README, "A
+  // robust finish that stops when the cameras do").
+  double camera_step_tolerance = 0;
   int num_threads = -1;        // -1: all cores.
   bool print_summary = false;  // Ceres' report to the log at debug level.
   void Check() const;

@@ -527,6 +527,56 @@ TEST(BundleAdjustment, SolverNames) {
   EXPECT_FALSE(BundleAdjustmentSolverFromName("sparse").has_value());
 }
 
+// Under the Cauchy loss LM creeps on (the points near the loss's knee keep moving) long after
+// the cameras have settled: the camera step tolerance stops it there, in fewer iterations, with
+// the cameras where the long solve leaves them.
+TEST(BundleAdjustment, CameraStepToleranceStopsTheRobustCreepWithTheCamerasInPlace) {
+  for (const BundleAdjustmentSolver solver :
+       {BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kSparseSchur}) {
+    SetPRNGSeed(5);
+    SceneOptions scene;
+    scene.noise_px = 0.3;
+    const Reconstruction truth = SynthesizeScene(scene);
+    Reconstruction corrupted = truth;
+    for (const auto& [image_id, image] : truth.Images()) {
+      for (Point2D& point2D : corrupted.GetImage(image_id).points2D) {
+        if (RandomUniformReal(0, 1) >= 0.05) continue;
+        const double angle = RandomUniformReal(0, 2 * M_PI);
+        point2D.xy += RandomUniformReal(10, 50) * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+      }
+    }
+    const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+    Perturb(config, 0.5, 0.02, 0.02, &corrupted);
+
+    BundleAdjustmentOptions options = TightOptions(solver);
+    options.loss_function = LossFunctionType::kCauchy;
+    options.max_num_iterations = 200;
+    Reconstruction long_solve = corrupted;
+    const BundleAdjustmentSummary long_summary = BundleAdjust(options, config, &long_solve);
+    ASSERT_TRUE(long_summary.success) << long_summary.termination;
+    options.camera_step_tolerance = 3e-5;
+    Reconstruction stopped = corrupted;
+    const BundleAdjustmentSummary summary = BundleAdjust(options, config, &stopped);
+    ASSERT_TRUE(summary.success) << summary.termination;
+
+    EXPECT_NE(summary.termination.find("camera step tolerance"), std::string::npos)
+        << summary.termination;
+    EXPECT_LT(summary.num_iterations, long_summary.num_iterations);
+    const SceneErrors long_errors = CompareToTruth(truth, long_solve);
+    const SceneErrors errors = CompareToTruth(truth, stopped);
+    EXPECT_LT(errors.mean_center, 1.02 * long_errors.mean_center);
+    EXPECT_LT(errors.max_rotation_deg, 1.02 * long_errors.max_rotation_deg);
+    // Where the long solve leaves them: within a small share of the error to the truth.
+    const SceneErrors moved = CompareToTruth(long_solve, stopped);
+    EXPECT_LT(moved.max_center, 0.05 * long_errors.mean_center);
+    std::cout << (solver == BundleAdjustmentSolver::kDenseSchur ? "dense" : "sparse") << ": "
+              << summary.num_iterations << " iterations against " << long_summary.num_iterations
+              << "; mean centre error " << errors.mean_center << " against "
+              << long_errors.mean_center << ", largest centre move " << moved.max_center
+              << std::endl;
+  }
+}
+
 TEST(BundleAdjustment, OptionsCheck) {
   BundleAdjustmentOptions options;
   EXPECT_NO_THROW(options.Check());
@@ -534,6 +584,9 @@ TEST(BundleAdjustment, OptionsCheck) {
   EXPECT_THROW(options.Check(), CheckError);
   options = BundleAdjustmentOptions();
   options.num_threads = 0;
+  EXPECT_THROW(options.Check(), CheckError);
+  options = BundleAdjustmentOptions();
+  options.camera_step_tolerance = -1e-5;
   EXPECT_THROW(options.Check(), CheckError);
 }
 

@@ -103,6 +103,9 @@ class SchurSolver {
   void ApplyStep(const Eigen::VectorXd& camera_step, const std::vector<Eigen::Vector3d>& point_step,
                  Parameters* candidate) const;
   double ParameterNorm(const Parameters& parameters) const;
+  // The largest move of a camera parameter in `camera_step`, in the units of
+  // BundleAdjustmentOptions::camera_step_tolerance.
+  double LargestCameraMove(const Eigen::VectorXd& camera_step) const;
   int NumChunks() const { return static_cast<int>(chunk_begin_.size()) - 1; }
 
   const BundleAdjustmentOptions& options_;
@@ -659,6 +662,41 @@ double SchurSolver<ReducedMatrix>::ParameterNorm(const Parameters& parameters) c
 }
 
 template <typename ReducedMatrix>
+double SchurSolver<ReducedMatrix>::LargestCameraMove(const Eigen::VectorXd& camera_step) const {
+  // The scene's scale: the RMS distance of the camera centres (constant poses included) from
+  // their mean; 1 where they coincide.
+  std::vector<Eigen::Vector3d> centres(problem_.poses.size());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < centres.size(); ++i) {
+    centres[i] = -(parameters_.rotations[i].conjugate() * parameters_.translations[i]);
+    mean += centres[i] / static_cast<double>(centres.size());
+  }
+  double spread_squared = 0;
+  for (const Eigen::Vector3d& centre : centres) {
+    spread_squared += (centre - mean).squaredNorm() / static_cast<double>(centres.size());
+  }
+  const double spread = spread_squared > 0 ? std::sqrt(spread_squared) : 1.0;
+  double largest = 0;
+  for (size_t i = 0; i < problem_.poses.size(); ++i) {
+    const int offset = pose_offset_[i];
+    if (offset < 0) continue;
+    largest = std::max({largest, camera_step.segment<3>(offset).norm(),
+                        camera_step.segment<3>(offset + 3).norm() / spread});
+  }
+  for (size_t c = 0; c < problem_.cameras.size(); ++c) {
+    const int offset = camera_offset_[c];
+    if (offset < 0) continue;
+    const std::vector<int>& free = problem_.cameras[c].free_params;
+    for (size_t f = 0; f < free.size(); ++f) {
+      largest =
+          std::max(largest, std::abs(camera_step[offset + static_cast<int>(f)]) /
+                                std::max(1.0, std::abs(parameters_.camera_params[c][free[f]])));
+    }
+  }
+  return largest;
+}
+
+template <typename ReducedMatrix>
 BundleAdjustmentSummary SchurSolver<ReducedMatrix>::Solve() {
   BundleAdjustmentSummary summary;
   summary.solver = kSparse ? "sparse Schur LM (conjugate gradients)" : "dense Schur LM";
@@ -723,6 +761,8 @@ BundleAdjustmentSummary SchurSolver<ReducedMatrix>::Solve() {
     const double relative_decrease = cost_change / model_cost_change;
     if (std::isfinite(candidate_cost) && model_cost_change > 0 &&
         relative_decrease > kMinRelativeDecrease) {
+      const double camera_move =
+          options_.camera_step_tolerance > 0 ? LargestCameraMove(camera_step) : 0.0;
       // A swap, not a move: the next ApplyStep then copies into storage it already has.
       std::swap(parameters_, candidate);
       cost = Evaluate(parameters_, /*linearize=*/true);
@@ -732,6 +772,10 @@ BundleAdjustmentSummary SchurSolver<ReducedMatrix>::Solve() {
       decrease_factor = 2.0;
       if (gradient_max_norm() <= options_.gradient_tolerance) {
         termination << "CONVERGENCE: gradient tolerance reached";
+      } else if (options_.camera_step_tolerance > 0 &&
+                 camera_move <= options_.camera_step_tolerance) {
+        termination << "CONVERGENCE: camera step tolerance reached (largest move " << camera_move
+                    << ")";
       }
     } else {
       radius /= decrease_factor;

@@ -55,6 +55,10 @@ struct IncrementalMapperOptions {
     BundleAdjustmentOptions options;
     options.loss_function = LossFunctionType::kCauchy;
     options.max_num_iterations = 10;
+    // Each round stops once no camera moves by more than 3e-5 (radians, or of the centres'
+    // spread): the points' creep under Cauchy left the cameras where they were (README, "A
+    // robust finish that stops when the cameras do").
+    options.camera_step_tolerance = 3e-5;
     options.refine_focal_length = true;
     options.refine_extra_params = true;
     return options;
