@@ -258,26 +258,42 @@ TEST_P(BundleAdjustmentSolvers, RefinesPrincipalPointAndDistortionOnly) {
   EXPECT_NEAR(camera.params[3], expected[3], 1e-9);
 }
 
-TEST_P(BundleAdjustmentSolvers, RobustLossResistsOutliers) {
+// A scene with 0.3 px of noise, about 5 % of its observations moved 10 to 50 px in a random
+// direction, and its poses, points and gauge as GaugeFixedConfig and Perturb leave them.
+struct SceneWithOutliers {
+  Reconstruction truth, corrupted;
+  BundleAdjustmentConfig config;
+  size_t num_outliers = 0;
+};
+
+SceneWithOutliers MakeSceneWithOutliers() {
   // Seeded here so the outcome does not depend on which tests ran before in the process
   // (CTest runs every case in a process of its own).
   SetPRNGSeed(5);
-  SceneOptions scene;
-  scene.noise_px = 0.3;
-  const Reconstruction truth = SynthesizeScene(scene);
-  Reconstruction corrupted = truth;
-  size_t num_outliers = 0;
-  for (const auto& [image_id, image] : truth.Images()) {
-    for (Point2D& point2D : corrupted.GetImage(image_id).points2D) {
+  SceneOptions options;
+  options.noise_px = 0.3;
+  SceneWithOutliers scene;
+  scene.truth = SynthesizeScene(options);
+  scene.corrupted = scene.truth;
+  for (const auto& [image_id, image] : scene.truth.Images()) {
+    for (Point2D& point2D : scene.corrupted.GetImage(image_id).points2D) {
       if (RandomUniformReal(0, 1) >= 0.05) continue;
       const double angle = RandomUniformReal(0, 2 * M_PI);
       point2D.xy += RandomUniformReal(10, 50) * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-      ++num_outliers;
+      ++scene.num_outliers;
     }
   }
-  EXPECT_GT(num_outliers, 60u);
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
-  Perturb(config, 0.5, 0.02, 0.02, &corrupted);
+  scene.config = GaugeFixedConfig(scene.truth);
+  Perturb(scene.config, 0.5, 0.02, 0.02, &scene.corrupted);
+  return scene;
+}
+
+TEST_P(BundleAdjustmentSolvers, RobustLossResistsOutliers) {
+  const SceneWithOutliers scene = MakeSceneWithOutliers();
+  const Reconstruction& truth = scene.truth;
+  const Reconstruction& corrupted = scene.corrupted;
+  const BundleAdjustmentConfig& config = scene.config;
+  EXPECT_GT(scene.num_outliers, 60u);
 
   BundleAdjustmentOptions options = TightOptions(GetParam());
   options.function_tolerance = 1e-8;
@@ -533,20 +549,10 @@ TEST(BundleAdjustment, SolverNames) {
 TEST(BundleAdjustment, CameraStepToleranceStopsTheRobustCreepWithTheCamerasInPlace) {
   for (const BundleAdjustmentSolver solver :
        {BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kSparseSchur}) {
-    SetPRNGSeed(5);
-    SceneOptions scene;
-    scene.noise_px = 0.3;
-    const Reconstruction truth = SynthesizeScene(scene);
-    Reconstruction corrupted = truth;
-    for (const auto& [image_id, image] : truth.Images()) {
-      for (Point2D& point2D : corrupted.GetImage(image_id).points2D) {
-        if (RandomUniformReal(0, 1) >= 0.05) continue;
-        const double angle = RandomUniformReal(0, 2 * M_PI);
-        point2D.xy += RandomUniformReal(10, 50) * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-      }
-    }
-    const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
-    Perturb(config, 0.5, 0.02, 0.02, &corrupted);
+    const SceneWithOutliers scene = MakeSceneWithOutliers();
+    const Reconstruction& truth = scene.truth;
+    const Reconstruction& corrupted = scene.corrupted;
+    const BundleAdjustmentConfig& config = scene.config;
 
     BundleAdjustmentOptions options = TightOptions(solver);
     options.loss_function = LossFunctionType::kCauchy;
