@@ -260,12 +260,7 @@ double Reconstruction::ReprojectionError(image_t image_id, point2D_t point2D_idx
 double Reconstruction::ReprojectionError(image_t image_id, point2D_t point2D_idx,
                                          const Eigen::Vector3d& xyz) const {
   const Image& image = GetImage(image_id);
-  const Eigen::Vector3d point_in_cam = image.cam_from_world * xyz;
-  if (point_in_cam.z() <= std::numeric_limits<double>::epsilon()) {
-    return std::numeric_limits<double>::infinity();
-  }
-  return (GetCamera(image.camera_id).ImgFromCam(point_in_cam) - image.points2D[point2D_idx].xy)
-      .norm();
+  return parallax::ReprojectionError(image, GetCamera(image.camera_id), point2D_idx, xyz);
 }
 
 double Reconstruction::UpdatePointErrors() {
@@ -300,6 +295,15 @@ void Reconstruction::Transform(const Sim3d& new_from_old) {
   for (auto& [image_id, image] : images_) {
     image.cam_from_world = TransformCameraPose(new_from_old, image.cam_from_world);
   }
+}
+
+double ReprojectionError(const Image& image, const Camera& camera, point2D_t point2D_idx,
+                         const Eigen::Vector3d& xyz) {
+  const Eigen::Vector3d point_in_cam = image.cam_from_world * xyz;
+  if (point_in_cam.z() <= std::numeric_limits<double>::epsilon()) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return (camera.ImgFromCam(point_in_cam) - image.points2D[point2D_idx].xy).norm();
 }
 
 }  // namespace parallax

@@ -120,4 +120,10 @@ class Reconstruction {
   std::vector<RemovedObservation> removed_observations_;
 };
 
+// Reprojection error in pixels of keypoint `point2D_idx` of `image`, taken with `camera`, for
+// the world point `xyz`, or +inf when behind the camera: Reconstruction::ReprojectionError
+// for callers that hold the image and its camera already.
+double ReprojectionError(const Image& image, const Camera& camera, point2D_t point2D_idx,
+                         const Eigen::Vector3d& xyz);
+
 }  // namespace parallax
