@@ -126,8 +126,12 @@ void WriteModels(const std::vector<Reconstruction>& models, const std::filesyste
     for (size_t index = 0; index < models.size(); ++index) {
       const fs::path dir = staging / std::to_string(index);
       CreateDirectoryOrThrow(dir);
-      if (write_binary) WriteReconstructionBinary(models[index], dir);
-      if (write_text) WriteReconstructionText(models[index], dir);
+      // The two formats side by side: formatting the text files took longer than the rest of
+      // the writing and colouring together (templeRing: 25-30 ms of 40-60).
+      ParallelFor(0, 2, /*num_threads=*/-1, [&](size_t format) {
+        if (format == 0 && write_binary) WriteReconstructionBinary(models[index], dir);
+        if (format == 1 && write_text) WriteReconstructionText(models[index], dir);
+      });
     }
   } catch (...) {
     // A failed write (disk full) leaves the earlier sparse/ and nothing of its own.
