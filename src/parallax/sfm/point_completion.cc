@@ -10,6 +10,9 @@ namespace parallax {
 
 size_t CompletePoint(const TrackTriangulationOptions& options, point3D_t point3D_id,
                      TrackedReconstruction* model) {
+  // Without hops nothing is reached: returned before the lookups and the copy of the track,
+  // which the mapper otherwise paid for every point of every local adjustment (the default).
+  if (options.complete_max_transitivity <= 0) return 0;
   const Reconstruction& reconstruction = model->Model();
   if (!reconstruction.ExistsPoint3D(point3D_id)) return 0;
   const Point3D& point = reconstruction.GetPoint3D(point3D_id);
