@@ -32,14 +32,14 @@ inline void AddRow(const float* row, const float* kernel, int j, int x,
   }
 }
 
-// out[q][x] = sum_j kernel[j - q] rows[j][x] for q < kRowsPerStep and j < taps + kRowsPerStep
-// - 1, where `kernel` reads zero for the kRowsPerStep - 1 taps before and after its own (the
-// first and last rows, which only some outputs reach, skip most of those zeros).
+// out[q][x] = sum_j kernel[j - q] rows[j][x] for q < kRowsPerStep, j < taps + kRowsPerStep
+// - 1 and the columns from x on, where `kernel` reads zero for the kRowsPerStep - 1 taps
+// before and after its own (the first and last rows, which only some outputs reach, skip
+// most of those zeros).
 void VerticalStep(const float* const* rows, const float* kernel, int taps, int width,
-                  float* const* out) {
+                  float* const* out, int x = 0) {
   static_assert(kRowsPerStep == 4);
   const int last = taps + kRowsPerStep - 2;
-  int x = 0;
   // The first three and last three rows are apart from a kernel of three taps on.
   for (; taps >= kRowsPerStep - 1 && x + kVerticalBlock <= width; x += kVerticalBlock) {
     Float8 acc[kRowsPerStep][2] = {};
@@ -67,11 +67,11 @@ void VerticalStep(const float* const* rows, const float* kernel, int taps, int w
 // Outputs per horizontal block: four registers of accumulators.
 constexpr int kHorizontalBlock = 32;
 
-// out[x] = k[0] row[x] + sum_i k[i] (row[x - i] + row[x + i]) for x < width, where `row` is
-// padded by radius samples on each side: the kernel's symmetry halves the products, and the
-// row is in L1.
-void HorizontalRow(const float* row, const Float8* taps, int radius, int width, float* out) {
-  int x = 0;
+// out[x] = k[0] row[x] + sum_i k[i] (row[x - i] + row[x + i]) from x to width, where `row`
+// is padded by radius samples on each side: the kernel's symmetry halves the products, and
+// the row is in L1.
+void HorizontalRow(const float* row, const Float8* taps, int radius, int width, float* out,
+                   int x = 0) {
   for (; x + kHorizontalBlock <= width; x += kHorizontalBlock) {
     const float* centre = row + x;
     Float8 acc0 = taps[0] * Load8(centre), acc1 = taps[0] * Load8(centre + 8),
@@ -98,7 +98,87 @@ void HorizontalRow(const float* row, const Float8* taps, int radius, int width, 
   }
 }
 
+#if defined(__x86_64__) && defined(__FMA__) && (defined(__GNUC__) || defined(__clang__))
+#define PARALLAX_BLUR_AVX512 1
+
+// The two passes in AVX-512 registers, for the blocks of twice the columns that fit: each
+// lane runs the operations of the passes above in their order (so the floats are theirs),
+// and each returns the first column it left to them.
+constexpr int kVerticalBlock512 = 2 * kVerticalBlock;
+constexpr int kHorizontalBlock512 = 2 * kHorizontalBlock;
+
+template <int kFirst, int kLast>
+__attribute__((target("avx512f"), always_inline)) inline void AddRow512(
+    const float* row, const float* kernel, int j, int x, __m512 (&acc)[kRowsPerStep][2]) {
+  const __m512 low = _mm512_loadu_ps(row + x), high = _mm512_loadu_ps(row + x + 16);
+#pragma GCC unroll 4
+  for (int q = kFirst; q <= kLast; ++q) {
+    const __m512 k = _mm512_set1_ps(kernel[j - q]);
+    acc[q][0] = _mm512_fmadd_ps(k, low, acc[q][0]);
+    acc[q][1] = _mm512_fmadd_ps(k, high, acc[q][1]);
+  }
+}
+
+__attribute__((target("avx512f"))) int VerticalStepAvx512(const float* const* rows,
+                                                          const float* kernel, int taps, int width,
+                                                          float* const* out) {
+  const int last = taps + kRowsPerStep - 2;
+  int x = 0;
+  for (; taps >= kRowsPerStep - 1 && x + kVerticalBlock512 <= width; x += kVerticalBlock512) {
+    __m512 acc[kRowsPerStep][2];
+    for (auto& row : acc) row[0] = row[1] = _mm512_setzero_ps();
+    AddRow512<0, 0>(rows[0], kernel, 0, x, acc);
+    AddRow512<0, 1>(rows[1], kernel, 1, x, acc);
+    AddRow512<0, 2>(rows[2], kernel, 2, x, acc);
+    for (int j = 3; j <= last - 3; ++j) AddRow512<0, 3>(rows[j], kernel, j, x, acc);
+    AddRow512<1, 3>(rows[last - 2], kernel, last - 2, x, acc);
+    AddRow512<2, 3>(rows[last - 1], kernel, last - 1, x, acc);
+    AddRow512<3, 3>(rows[last], kernel, last, x, acc);
+    for (int q = 0; q < kRowsPerStep; ++q) {
+      _mm512_storeu_ps(out[q] + x, acc[q][0]);
+      _mm512_storeu_ps(out[q] + x + 16, acc[q][1]);
+    }
+  }
+  return x;
+}
+
+__attribute__((target("avx512f"))) int HorizontalRowAvx512(const float* row, const Float8* taps,
+                                                           int radius, int width, float* out) {
+  int x = 0;
+  for (; x + kHorizontalBlock512 <= width; x += kHorizontalBlock512) {
+    const float* centre = row + x;
+    const __m512 k0 = _mm512_set1_ps(taps[0][0]);
+    __m512 acc[4];
+    for (int v = 0; v < 4; ++v) acc[v] = _mm512_mul_ps(k0, _mm512_loadu_ps(centre + 16 * v));
+    for (int i = 1; i <= radius; ++i) {
+      const __m512 k = _mm512_set1_ps(taps[i][0]);
+      const float* a = centre - i;
+      const float* b = centre + i;
+#pragma GCC unroll 4
+      for (int v = 0; v < 4; ++v) {
+        const __m512 sum = _mm512_add_ps(_mm512_loadu_ps(a + 16 * v), _mm512_loadu_ps(b + 16 * v));
+        acc[v] = _mm512_fmadd_ps(k, sum, acc[v]);
+      }
+    }
+    for (int v = 0; v < 4; ++v) _mm512_storeu_ps(out + x + 16 * v, acc[v]);
+  }
+  return x;
+}
+#endif
+
 }  // namespace
+
+bool BlurHasAvx512() {
+#if defined(PARALLAX_BLUR_AVX512)
+  static const bool available = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f");
+  }();
+  return available;
+#else
+  return false;
+#endif
+}
 
 std::vector<float> GaussianHalfKernel(double sigma) {
   PARALLAX_CHECK_GT(sigma, 0.0);
@@ -110,7 +190,8 @@ std::vector<float> GaussianHalfKernel(double sigma) {
   return half;
 }
 
-WindowedGaussianBlur::WindowedGaussianBlur(const cv::Mat& src, double sigma) : src_(src) {
+WindowedGaussianBlur::WindowedGaussianBlur(const cv::Mat& src, double sigma, BlurVectors vectors)
+    : src_(src), avx512_(vectors == BlurVectors::kWidest && BlurHasAvx512()) {
   PARALLAX_CHECK_EQ(src.type(), CV_32F);
   const std::vector<float> half = GaussianHalfKernel(sigma);
   radius_ = static_cast<int>(half.size()) - 1;
@@ -171,24 +252,38 @@ void WindowedGaussianBlur::Blur(cv::Rect window, float* out, size_t out_stride,
     for (int j = 0; j < static_cast<int>(inputs_.size()); ++j) {
       inputs_[j] = src_.ptr<float>(std::clamp(r - radius + j, 0, rows - 1)) + vertical_begin;
     }
-    VerticalStep(inputs_.data(), kernel, taps, width, vertical_rows.data());
+    int vertical_done = 0;
+#if defined(PARALLAX_BLUR_AVX512)
+    if (avx512_) {
+      vertical_done = VerticalStepAvx512(inputs_.data(), kernel, taps, width, vertical_rows.data());
+    }
+#endif
+    VerticalStep(inputs_.data(), kernel, taps, width, vertical_rows.data(), vertical_done);
     for (int q = 0; q < kRowsPerStep && r + q < window_end; ++q) {
       float* row = vertical_.data() + q * stride;  // row[x - low] is column x.
       for (int x = window.x - radius; x < 0; ++x) row[x - low] = row[-low];
       for (int x = cols; x < window_end_col + radius; ++x) row[x - low] = row[cols - 1 - low];
-      HorizontalRow(row + (window.x - low), half_taps_.data(), radius, window.width,
-                    out + (r + q - window.y) * out_stride);
+      const float* centre = row + (window.x - low);
+      float* out_row = out + (r + q - window.y) * out_stride;
+      int horizontal_done = 0;
+#if defined(PARALLAX_BLUR_AVX512)
+      if (avx512_) {
+        horizontal_done =
+            HorizontalRowAvx512(centre, half_taps_.data(), radius, window.width, out_row);
+      }
+#endif
+      HorizontalRow(centre, half_taps_.data(), radius, window.width, out_row, horizontal_done);
       if (row_done) row_done(r + q);
     }
   }
 }
 
 void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst,
-                  const std::function<void(int row)>& row_done) {
+                  const std::function<void(int row)>& row_done, BlurVectors vectors) {
   PARALLAX_CHECK(dst != nullptr);
   PARALLAX_CHECK_EQ(src.type(), CV_32F);
   PARALLAX_CHECK(dst->data == nullptr || dst->data != src.data);
-  WindowedGaussianBlur blur(src, sigma);
+  WindowedGaussianBlur blur(src, sigma, vectors);
   dst->create(src.size(), CV_32F);
   blur.Blur(cv::Rect(cv::Point(0, 0), src.size()), dst, row_done);
 }

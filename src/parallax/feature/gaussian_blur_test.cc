@@ -128,6 +128,38 @@ TEST(WindowedGaussianBlur, WritesTheFullBlursFloatsInTheWindowAlone) {
   }
 }
 
+// AVX-512 gives the build's vectors' floats bit for bit: the full image and windows, widths
+// that leave AVX-512 blocks, AVX2 blocks and single columns, kernels of 1 to 41 taps.
+TEST(GaussianBlur, TheWidestVectorsGiveTheBuildsFloats) {
+  if (!BlurHasAvx512()) GTEST_SKIP() << "this CPU has no AVX-512: both are the build's vectors";
+  const std::vector<cv::Size> sizes = {{1280, 40}, {640, 48}, {97, 33}, {200, 9}, {17, 7}};
+  uint64_t seed = 41;
+  for (const cv::Size& size : sizes) {
+    const cv::Mat image = RandomImage(size.width, size.height, seed++);
+    cv::RNG rng(seed++);
+    for (const double sigma : {0.1, 0.3, 1.23, 3.09, 5.0}) {
+      cv::Mat build, widest;
+      GaussianBlur(image, sigma, &build, nullptr, BlurVectors::kBuild);
+      GaussianBlur(image, sigma, &widest, nullptr, BlurVectors::kWidest);
+      ASSERT_EQ(cv::norm(build, widest, cv::NORM_INF), 0.0)
+          << size.width << "x" << size.height << " sigma " << sigma;
+      WindowedGaussianBlur build_window(image, sigma, BlurVectors::kBuild);
+      WindowedGaussianBlur widest_window(image, sigma, BlurVectors::kWidest);
+      for (int trial = 0; trial < 10; ++trial) {
+        const int width = rng.uniform(1, size.width + 1);
+        const int height = rng.uniform(1, size.height + 1);
+        const cv::Rect window(rng.uniform(0, size.width - width + 1),
+                              rng.uniform(0, size.height - height + 1), width, height);
+        cv::Mat a(image.size(), CV_32F, cv::Scalar(-1)), b(image.size(), CV_32F, cv::Scalar(-1));
+        build_window.Blur(window, &a);
+        widest_window.Blur(window, &b);
+        ASSERT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0)
+            << size.width << "x" << size.height << " sigma " << sigma << " window " << window;
+      }
+    }
+  }
+}
+
 // Into a buffer of the window's own: the same floats, rows out_stride apart.
 TEST(WindowedGaussianBlur, WritesAWindowIntoABufferOfItsOwn) {
   const cv::Mat image = RandomImage(150, 90, 31);
