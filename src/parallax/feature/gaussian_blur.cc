@@ -36,20 +36,30 @@ inline void AddRow(const float* row, const float* kernel, int j, int x,
 // - 1 and the columns from x on, where `kernel` reads zero for the kRowsPerStep - 1 taps
 // before and after its own (the first and last rows, which only some outputs reach, skip
 // most of those zeros).
-void VerticalStep(const float* const* rows, const float* kernel, int taps, int width,
-                  float* const* out, int x = 0) {
+// Calls add.operator()<first, last>(j) for each input row j of a step, first to last being
+// the output rows that j reaches: the first three and last three rows apart, for a kernel of
+// three taps on. Its callers are flattened, so that the calls and AddRow are inlined.
+template <typename AddRowFn>
+void ForEachStepRow(int taps, const AddRowFn& add) {
   static_assert(kRowsPerStep == 4);
   const int last = taps + kRowsPerStep - 2;
-  // The first three and last three rows are apart from a kernel of three taps on.
+  add.template operator()<0, 0>(0);
+  add.template operator()<0, 1>(1);
+  add.template operator()<0, 2>(2);
+  for (int j = 3; j <= last - 3; ++j) add.template operator()<0, 3>(j);
+  add.template operator()<1, 3>(last - 2);
+  add.template operator()<2, 3>(last - 1);
+  add.template operator()<3, 3>(last);
+}
+
+__attribute__((flatten)) void VerticalStep(const float* const* rows, const float* kernel, int taps,
+                                           int width, float* const* out, int x = 0) {
+  const int last = taps + kRowsPerStep - 2;
   for (; taps >= kRowsPerStep - 1 && x + kVerticalBlock <= width; x += kVerticalBlock) {
     Float8 acc[kRowsPerStep][2] = {};
-    AddRow<0, 0>(rows[0], kernel, 0, x, acc);
-    AddRow<0, 1>(rows[1], kernel, 1, x, acc);
-    AddRow<0, 2>(rows[2], kernel, 2, x, acc);
-    for (int j = 3; j <= last - 3; ++j) AddRow<0, 3>(rows[j], kernel, j, x, acc);
-    AddRow<1, 3>(rows[last - 2], kernel, last - 2, x, acc);
-    AddRow<2, 3>(rows[last - 1], kernel, last - 1, x, acc);
-    AddRow<3, 3>(rows[last], kernel, last, x, acc);
+    ForEachStepRow(taps, [&]<int kFirst, int kLast>(int j) {
+      AddRow<kFirst, kLast>(rows[j], kernel, j, x, acc);
+    });
     for (int q = 0; q < kRowsPerStep; ++q) {
       Store8(out[q] + x, acc[q][0]);
       Store8(out[q] + x + 8, acc[q][1]);
@@ -119,21 +129,18 @@ __attribute__((target("avx512f"), always_inline)) inline void AddRow512(
   }
 }
 
-__attribute__((target("avx512f"))) int VerticalStepAvx512(const float* const* rows,
-                                                          const float* kernel, int taps, int width,
-                                                          float* const* out) {
-  const int last = taps + kRowsPerStep - 2;
+__attribute__((target("avx512f"), flatten)) int VerticalStepAvx512(const float* const* rows,
+                                                                   const float* kernel, int taps,
+                                                                   int width, float* const* out) {
   int x = 0;
   for (; taps >= kRowsPerStep - 1 && x + kVerticalBlock512 <= width; x += kVerticalBlock512) {
     __m512 acc[kRowsPerStep][2];
     for (auto& row : acc) row[0] = row[1] = _mm512_setzero_ps();
-    AddRow512<0, 0>(rows[0], kernel, 0, x, acc);
-    AddRow512<0, 1>(rows[1], kernel, 1, x, acc);
-    AddRow512<0, 2>(rows[2], kernel, 2, x, acc);
-    for (int j = 3; j <= last - 3; ++j) AddRow512<0, 3>(rows[j], kernel, j, x, acc);
-    AddRow512<1, 3>(rows[last - 2], kernel, last - 2, x, acc);
-    AddRow512<2, 3>(rows[last - 1], kernel, last - 1, x, acc);
-    AddRow512<3, 3>(rows[last], kernel, last, x, acc);
+    // A lambda does not take its function's target: it is given it.
+    ForEachStepRow(
+        taps, [&]<int kFirst, int kLast>(int j) __attribute__((target("avx512f"))) {
+          AddRow512<kFirst, kLast>(rows[j], kernel, j, x, acc);
+        });
     for (int q = 0; q < kRowsPerStep; ++q) {
       _mm512_storeu_ps(out[q] + x, acc[q][0]);
       _mm512_storeu_ps(out[q] + x + 16, acc[q][1]);
