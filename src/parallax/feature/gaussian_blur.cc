@@ -32,10 +32,6 @@ inline void AddRow(const float* row, const float* kernel, int j, int x,
   }
 }
 
-// out[q][x] = sum_j kernel[j - q] rows[j][x] for q < kRowsPerStep, j < taps + kRowsPerStep
-// - 1 and the columns from x on, where `kernel` reads zero for the kRowsPerStep - 1 taps
-// before and after its own (the first and last rows, which only some outputs reach, skip
-// most of those zeros).
 // Calls add.operator()<first, last>(j) for each input row j of a step, first to last being
 // the output rows that j reaches: the first three and last three rows apart, for a kernel of
 // three taps on. Its callers are flattened, so that the calls and AddRow are inlined.
@@ -52,6 +48,10 @@ void ForEachStepRow(int taps, const AddRowFn& add) {
   add.template operator()<3, 3>(last);
 }
 
+// out[q][x] = sum_j kernel[j - q] rows[j][x] for q < kRowsPerStep, j < taps + kRowsPerStep
+// - 1 and the columns from x on, where `kernel` reads zero for the kRowsPerStep - 1 taps
+// before and after its own (the first and last rows, which only some outputs reach, skip
+// most of those zeros).
 __attribute__((flatten)) void VerticalStep(const float* const* rows, const float* kernel, int taps,
                                            int width, float* const* out, int x = 0) {
   const int last = taps + kRowsPerStep - 2;
@@ -171,6 +171,10 @@ __attribute__((target("avx512f"))) int HorizontalRowAvx512(const float* row, con
   }
   return x;
 }
+#else
+// No AVX-512 code in this build (BlurHasAvx512() is false): every column is the passes' above.
+int VerticalStepAvx512(const float* const*, const float*, int, int, float* const*) { return 0; }
+int HorizontalRowAvx512(const float*, const Float8*, int, int, float*) { return 0; }
 #endif
 
 }  // namespace
@@ -259,12 +263,8 @@ void WindowedGaussianBlur::Blur(cv::Rect window, float* out, size_t out_stride,
     for (int j = 0; j < static_cast<int>(inputs_.size()); ++j) {
       inputs_[j] = src_.ptr<float>(std::clamp(r - radius + j, 0, rows - 1)) + vertical_begin;
     }
-    int vertical_done = 0;
-#if defined(PARALLAX_BLUR_AVX512)
-    if (avx512_) {
-      vertical_done = VerticalStepAvx512(inputs_.data(), kernel, taps, width, vertical_rows.data());
-    }
-#endif
+    const int vertical_done =
+        avx512_ ? VerticalStepAvx512(inputs_.data(), kernel, taps, width, vertical_rows.data()) : 0;
     VerticalStep(inputs_.data(), kernel, taps, width, vertical_rows.data(), vertical_done);
     for (int q = 0; q < kRowsPerStep && r + q < window_end; ++q) {
       float* row = vertical_.data() + q * stride;  // row[x - low] is column x.
@@ -272,13 +272,9 @@ void WindowedGaussianBlur::Blur(cv::Rect window, float* out, size_t out_stride,
       for (int x = cols; x < window_end_col + radius; ++x) row[x - low] = row[cols - 1 - low];
       const float* centre = row + (window.x - low);
       float* out_row = out + (r + q - window.y) * out_stride;
-      int horizontal_done = 0;
-#if defined(PARALLAX_BLUR_AVX512)
-      if (avx512_) {
-        horizontal_done =
-            HorizontalRowAvx512(centre, half_taps_.data(), radius, window.width, out_row);
-      }
-#endif
+      const int horizontal_done =
+          avx512_ ? HorizontalRowAvx512(centre, half_taps_.data(), radius, window.width, out_row)
+                  : 0;
       HorizontalRow(centre, half_taps_.data(), radius, window.width, out_row, horizontal_done);
       if (row_done) row_done(r + q);
     }
