@@ -205,6 +205,14 @@ class LayerGradient {
         const float* above = image_.ptr<float>(r - 1);
         const float* row = image_.ptr<float>(r);
         const float* below = image_.ptr<float>(r + 1);
+        // The layer was written before every octave's extrema were found, so its rows come
+        // from memory, and each row's segment is too short for the hardware prefetcher to
+        // get going: the next row's is asked for now (templeRing: ComputeNativeSift's own
+        // time, where this loop is inlined, 10 to 28 % less).
+        if (r + 2 < image_.rows) {
+          const float* next = image_.ptr<float>(r + 2);
+          for (int c = col_begin; c < col_end; c += 16) __builtin_prefetch(next + c);
+        }
         for (int c = std::max(col_begin, 1); c < std::min(col_end, image_.cols - 1); ++c) {
           gx[c] = 0.5f * (row[c + 1] - row[c - 1]);
           gy[c] = 0.5f * (below[c] - above[c]);
