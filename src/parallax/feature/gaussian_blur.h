@@ -58,7 +58,7 @@ class WindowedGaussianBlur {
   std::vector<Float8> half_taps_;     // Centre first, each broadcast to a vector.
   std::vector<float> padded_kernel_;  // All taps, with zeros on either side.
   std::vector<float> vertical_;       // The vertical pass's rows.
-  std::vector<const float*> inputs_;  // The input rows of one vertical step.
+  std::vector<const float*> inputs_;  // The input rows of one vertical step, and the next's.
 };
 
 }  // namespace parallax
