@@ -46,7 +46,8 @@ constexpr int kDescriptorHistogramSize = kPaddedGrid * kPaddedGrid * kDescriptor
 // Copies of the histogram that successive samples of a row take turns adding to (sample i to
 // copy i % kDescriptorCopies): a row's samples stay in one cell for five to ten steps, and
 // each add waits for the last add to its copy's cell to land (a store forwarded to a load,
-// then a multiply-add).
+// then a multiply-add). Four rather than two: templeRing's single-thread extraction CPU
+// 1.51 -> 1.47 s (eight measured the same as four).
 constexpr int kDescriptorCopies = 4;
 static_assert((kDescriptorCopies & (kDescriptorCopies - 1)) == 0, "a power of two");
 static_assert(kDescriptorSize == 128);
@@ -843,9 +844,7 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
   // Each sample adds to the 2 x 2 (column, row) cells around it in the padded histogram,
   // to each cell's two orientation bins around its own: one vector of eight orientation
   // weights, scaled per cell. The padding is dropped afterwards.
-  // kDescriptorCopies copies, taken in turn along a row: neighbouring samples mostly hit the
-  // same cells, and with four copies a sample's adds wait for those of the sample four
-  // before it, not one (templeRing's descriptors 4 % less CPU than with two copies).
+  // kDescriptorCopies copies, taken in turn along a row (see there), summed at the end.
   alignas(32) std::array<float, kDescriptorCopies * kDescriptorHistogramSize> histogram{};
   const Float8 bin_index = {0, 1, 2, 3, 4, 5, 6, 7};
   const Float8 zero = {}, one = zero + 1.0f, num_bins = zero + kDescriptorOrientations;
