@@ -58,6 +58,16 @@ inline Float8 Max8(Float8 a, Float8 b) {
 #endif
 }
 
+// floor(v), lane by lane.
+inline Float8 Floor8(Float8 v) {
+#if defined(__AVX__)
+  return reinterpret_cast<Float8>(_mm256_floor_ps(reinterpret_cast<__m256>(v)));
+#else
+  for (int i = 0; i < 8; ++i) v[i] = std::floor(v[i]);
+  return v;
+#endif
+}
+
 // a * b + c, fused (one rounding) where the target has FMA whatever -ffp-contract says, and
 // so rounded alike in a vector loop and in its scalar tail (MulAdd): left to contraction, GCC
 // -O3 fused the one and vectorised the other's products unfused.

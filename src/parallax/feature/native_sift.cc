@@ -47,9 +47,14 @@ constexpr int kDescriptorHistogramSize = kPaddedGrid * kPaddedGrid * kDescriptor
 // copy i % kDescriptorCopies): a row's samples stay in one cell for five to ten steps, and
 // each add waits for the last add to its copy's cell to land (a store forwarded to a load,
 // then a multiply-add). Four rather than two: templeRing's single-thread extraction CPU
-// 1.51 -> 1.47 s (eight measured the same as four).
-constexpr int kDescriptorCopies = 4;
+// 1.51 -> 1.47 s; eight rather than four, once the adds ran in one loop over many rows
+// (AddDescriptorSamples): the descriptors' share of extraction's perf samples 25.2 -> 24.1 %.
+constexpr int kDescriptorCopies = 8;
 static_assert((kDescriptorCopies & (kDescriptorCopies - 1)) == 0, "a power of two");
+// A descriptor's samples are computed a Float8 at a time (DescriptorSamples), and sample
+// i's copy is i % kDescriptorCopies, the same in every block.
+constexpr int kSampleLanes = 8;
+static_assert(kSampleLanes % kDescriptorCopies == 0);
 static_assert(kDescriptorSize == 128);
 static_assert(kDescriptorOrientations == 8);
 
@@ -74,6 +79,21 @@ struct Gradient {
   float* MutableAngle(int r) { return angle_ring.ptr<float>(r & ring_mask); }
 };
 
+// The buffers that each frame's orientations and descriptor are computed in, kept from frame
+// to frame: allocating them for each frame was a percent of extraction. Grown, never shrunk
+// (Reserve): a vector's resize up from a smaller frame's size would zero what it adds.
+struct FrameScratch {
+  std::vector<float> weights_x, weights_y;  // The Gaussian window (GaussianWeights).
+  std::vector<float> samples;               // Samples' bins and weights, array by array.
+  std::vector<int32_t> offsets;             // Their histogram cells (FrameDescriptor).
+
+  template <typename T>
+  static T* Reserve(size_t size, std::vector<T>* buffer) {
+    if (buffer->size() < size) buffer->resize(size);
+    return buffer->data();
+  }
+};
+
 }  // namespace
 
 // The Gaussian scale space of one image, and the buffers it is built in (NativeSiftBuffers
@@ -93,8 +113,7 @@ struct NativeSiftScaleSpace {
   cv::Mat magnitude_ring, angle_ring;
   int ring_mask = 0;
   std::vector<float> dx_row, dy_row;  // One row of differences, before PolarRow.
-  std::vector<float> samples;         // One row of a descriptor's samples.
-  std::vector<int32_t> offsets;       // Their histogram cells (FrameDescriptor).
+  FrameScratch frame_scratch;         // FrameOrientations' and FrameDescriptor's.
   HugePageBuffer memory;              // Holds every cv::Mat above.
 };
 
@@ -283,8 +302,9 @@ void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOpti
   const int ring_rows =
       static_cast<int>(std::bit_ceil(static_cast<unsigned>(GradientRingRows(options, base_size))));
   space->ring_mask = ring_rows - 1;
-  // A layer of fewer rows has each in a row of its own (r & ring_mask == r).
-  const cv::Size ring_size(base_size.width, std::min(ring_rows, base_size.height));
+  // A layer of fewer rows has each in a row of its own (r & ring_mask == r). Padded by a
+  // block of samples, which DescriptorSamples may read past a row's last column.
+  const cv::Size ring_size(base_size.width + kSampleLanes, std::min(ring_rows, base_size.height));
   layout.emplace_back(&space->magnitude_ring, ring_size);
   layout.emplace_back(&space->angle_ring, ring_size);
   // An image too small for one octave has no layers to share.
@@ -665,18 +685,21 @@ bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options,
 // neighbouring weights differ by the factor exp(-(2 d + 1) / (2 sigma^2)), which itself
 // changes by exp(-1 / sigma^2) from one to the next; in double, so that the products lose
 // nothing a float keeps (the expf per weight were 1.5 % of extraction).
-void GaussianWeights(int radius, float fraction, float sigma, std::vector<float>* weights) {
-  weights->resize(2 * radius + 1);
+const float* GaussianWeights(int radius, float fraction, float sigma, std::vector<float>* weights) {
+  // Zeros after the last weight for DescriptorSamples' last block of a row.
+  float* w = FrameScratch::Reserve(2 * radius + kSampleLanes, weights);
   const double scale = -0.5 / (static_cast<double>(sigma) * sigma);
   const double first = -radius - static_cast<double>(fraction);
   double weight = std::exp(scale * first * first);
   double ratio = std::exp(scale * (2 * first + 1));
   const double ratio_step = std::exp(2 * scale);
-  for (float& w : *weights) {
-    w = static_cast<float>(weight);
+  for (int i = 0; i <= 2 * radius; ++i) {
+    w[i] = static_cast<float>(weight);
     weight *= ratio;
     ratio *= ratio_step;
   }
+  std::fill(w + 2 * radius + 1, w + 2 * radius + kSampleLanes, 0.0f);
+  return w;
 }
 
 // The orientation-histogram entries of `count` samples along a row: for each, the padded
@@ -700,20 +723,19 @@ void OrientationSamples(int count, const float* __restrict angle, const float* _
 // weighted by magnitude and a Gaussian window, smoothed, whose peaks within 80 % of the
 // highest become orientations (interpolated by a parabola), strongest first.
 std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y, float octave_scale,
-                                     int max_orientations, std::vector<float>* samples) {
+                                     int max_orientations, FrameScratch* scratch) {
   const float window_sigma = kOrientationWindow * octave_scale;
   const int radius = OrientationRadius(octave_scale);
   const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
-  std::vector<float> weights_x, weights_y;
-  GaussianWeights(radius, x - xi, window_sigma, &weights_x);
-  GaussianWeights(radius, y - yi, window_sigma, &weights_y);
+  const float* weights_x = GaussianWeights(radius, x - xi, window_sigma, &scratch->weights_x);
+  const float* weights_y = GaussianWeights(radius, y - yi, window_sigma, &scratch->weights_y);
 
   // Padded by a bin on each side; two copies, for even and odd columns, so that one
   // sample's adds need not wait for the last one's.
   constexpr int kPaddedBins = kOrientationBins + 2;
   std::array<float, 2 * kPaddedBins> padded{};
-  samples->resize(3 * static_cast<size_t>(2 * radius + 1));
-  float* sample_bin = samples->data();
+  float* sample_bin =
+      FrameScratch::Reserve(3 * static_cast<size_t>(2 * radius + 1), &scratch->samples);
   float* sample_share = sample_bin + (2 * radius + 1);
   float* sample_weight = sample_share + (2 * radius + 1);
   for (int dy = -radius; dy <= radius; ++dy) {
@@ -729,8 +751,8 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
     const int count = c_end - c_begin + 1;
     if (count <= 0) continue;
     OrientationSamples(count, gradient.Angle(r) + c_begin, gradient.Magnitude(r) + c_begin,
-                       weights_x.data() + (c_begin - xi + radius), weights_y[dy + radius],
-                       sample_bin, sample_share, sample_weight);
+                       weights_x + (c_begin - xi + radius), weights_y[dy + radius], sample_bin,
+                       sample_share, sample_weight);
     for (int i = 0; i < count; ++i) {
       float* bin = padded.data() + (i & 1) * kPaddedBins + static_cast<int>(sample_bin[i]);
       const float upper = sample_share[i] * sample_weight[i];
@@ -776,51 +798,92 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
   return orientations;
 }
 
-// The descriptor bins and weights of `count` samples along a row: sample i is at bin (bin_x
-// + i step_x, bin_y + i step_y), and weighs nothing outside the window. For each sample, the
-// offset in the histograms of its lowest (column, row) cell (in copy i % kDescriptorCopies),
-// its weight for each of the 2 x 2 cells from there, and its orientation in bins, in [0, 8).
-// A function of its own, with __restrict, so that the compiler vectorises it (inlined into
-// the row loop it did not; and it needs -fno-trapping-math, see CMakeLists.txt). The floors
-// here, in vector registers, took a quarter of the time of the scalar loop that adds the
-// samples; the cells' weights, computed there, were a quarter of that loop's instructions.
+// Where DescriptorSamples writes each sample's histogram offset, orientation and weights.
+struct DescriptorSampleArrays {
+  int32_t* offset;
+  float *orientation, *w00, *w01, *w10, *w11;
+
+  DescriptorSampleArrays Advanced(size_t n) const {
+    return {offset + n, orientation + n, w00 + n, w01 + n, w10 + n, w11 + n};
+  }
+};
+
+// The descriptor bins and weights of `count` samples along a row, eight at a time: sample i
+// is at bin (bin_x + i step_x, bin_y + i step_y), and weighs nothing outside the window. For
+// each sample, the offset in the histograms of its lowest (column, row) cell (in copy
+// i % kDescriptorCopies), its weight for each of the 2 x 2 cells from there, and its
+// orientation in bins, in [0, 8). The last block reads and writes up to kSampleLanes - 1
+// samples past `count` (the rings, the window and `out` are padded for them; what it writes
+// there the next row overwrites or nothing reads). The compiler's vectorisation of this loop
+// ended each row in a scalar tail: with the adds after it, row by row, that tail and the
+// rows' other overhead were nearly half of FrameDescriptor's perf samples.
 void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float step_y,
-                       const float* __restrict angle, float orientation,
-                       const float* __restrict magnitude, const float* __restrict window_x,
-                       float window_y, int32_t* __restrict sample_offset,
-                       float* __restrict sample_orientation, float* __restrict sample_w00,
-                       float* __restrict sample_w01, float* __restrict sample_w10,
-                       float* __restrict sample_w11) {
+                       const float* angle, float orientation, const float* magnitude,
+                       const float* window_x, float window_y, const DescriptorSampleArrays& out) {
   constexpr float kBinsPerRadian = kDescriptorOrientations / kTwoPi;
   constexpr float kLastOrientationBin = 7.99999952f;  // The float below 8.
-  for (int i = 0; i < count; ++i) {
-    const float x = bin_x + static_cast<float>(i) * step_x;
-    const float y = bin_y + static_cast<float>(i) * step_y;
-    const bool inside = (x > -1.0f) & (x < kDescriptorGrid) & (y > -1.0f) & (y < kDescriptorGrid);
+  const Float8 zero = {}, lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  // Sample i's copy: the same lane by lane, in every block of eight.
+  const Int8 copy_offset = Int8{0, 1, 2, 3, 4, 5, 6, 7} * kDescriptorHistogramSize;
+  for (int i = 0; i < count; i += kSampleLanes) {
+    const Float8 steps = lane + static_cast<float>(i);
+    const Float8 x = MulAdd8(steps, zero + step_x, zero + bin_x);
+    const Float8 y = MulAdd8(steps, zero + step_y, zero + bin_y);
+    const Int8 inside = (x > -1.0f) & (x < kDescriptorGrid) & (y > -1.0f) & (y < kDescriptorGrid);
     // Orientation bins count the gradient's angle from the frame's the other way round
     // (as with y up): Lowe's layout, which OpenCV and COLMAP store, so that descriptors of
     // either SIFT in one database compare bin for bin (VLFeat's count the other way).
-    float relative = orientation - angle[i];
-    relative += relative < 0.0f ? kTwoPi : 0.0f;
+    Float8 relative = orientation - Load8(angle + i);
+    relative += relative < zero ? zero + kTwoPi : zero;
     // Rounding can put an angle just under 2 pi at bin 8.0: held just below it (its weight
     // then goes to bin 7, and the rest, none, to bin 0).
-    sample_orientation[i] = std::min(relative * kBinsPerRadian, kLastOrientationBin);
+    Store8(out.orientation + i, Min8(relative * kBinsPerRadian, zero + kLastOrientationBin));
     // floor, not truncation of bin + 1: that sum can round up to the next integer. Outside
     // the window the bins are meaningless (and never used): clamped, so the conversions
     // stay in range.
-    const float x0 = std::floor(inside ? x : 0.0f), y0 = std::floor(inside ? y : 0.0f);
-    const float fx = x - x0, fy = y - y0;
-    const float cell = (y0 + 1.0f) * kPaddedGrid + (x0 + 1.0f);  // An exact integer.
-    sample_offset[i] = static_cast<int32_t>(cell) * kDescriptorOrientations +
-                       (i & (kDescriptorCopies - 1)) * kDescriptorHistogramSize;
+    const Float8 x0 = Floor8(inside ? x : zero), y0 = Floor8(inside ? y : zero);
+    const Float8 fx = x - x0, fy = y - y0;
+    const Float8 cell = MulAdd8(y0 + 1.0f, zero + kPaddedGrid, x0 + 1.0f);  // Exact integers.
+    const Int8 offset = __builtin_convertvector(cell, Int8) * kDescriptorOrientations + copy_offset;
+    std::memcpy(out.offset + i, &offset, sizeof(offset));
     // The sample's weight split over the 2 x 2 cells around it (bilinearly).
-    const float weight = (inside ? window_y : 0.0f) * magnitude[i] * window_x[i];
-    const float w1 = weight * fy, w0 = weight - w1;
-    const float w11 = w1 * fx, w01 = w0 * fx;
-    sample_w00[i] = w0 - w01;
-    sample_w01[i] = w01;
-    sample_w10[i] = w1 - w11;
-    sample_w11[i] = w11;
+    const Float8 weight =
+        ((inside ? zero + window_y : zero) * Load8(magnitude + i)) * Load8(window_x + i);
+    const Float8 w1 = weight * fy, w0 = weight - w1;
+    const Float8 w11 = w1 * fx, w01 = w0 * fx;
+    Store8(out.w00 + i, w0 - w01);
+    Store8(out.w01 + i, w01);
+    Store8(out.w10 + i, w1 - w11);
+    Store8(out.w11 + i, w11);
+  }
+}
+
+// Each sample adds to the 2 x 2 (column, row) cells around it in the padded histograms, to
+// each cell's two orientation bins around its own: one vector of eight orientation weights,
+// scaled per cell. A loop the compiler cannot vectorise; unrolled, its loop overhead was a
+// tenth of its instructions.
+void AddDescriptorSamples(const DescriptorSampleArrays& samples, int count, float* histograms) {
+  // Local copies: Store8's memcpy might have written over the struct's pointers, as far as
+  // the compiler knows, which then reloaded them after every add.
+  const int32_t* const offset = samples.offset;
+  const float *const orientation = samples.orientation, *const w00 = samples.w00,
+                     *const w01 = samples.w01, *const w10 = samples.w10, *const w11 = samples.w11;
+  const Float8 bin_index = {0, 1, 2, 3, 4, 5, 6, 7};
+  const Float8 zero = {}, one = zero + 1.0f, num_bins = zero + kDescriptorOrientations;
+#pragma GCC unroll 4
+  for (int i = 0; i < count; ++i) {
+    // Bin b takes 1 - (circular distance from the sample's orientation), when positive:
+    // 1 - fo for the bin below, fo for the one above (bin 0 above bin 7).
+    Float8 distance = Abs8(bin_index - orientation[i]);
+    distance = Min8(distance, num_bins - distance);
+    const Float8 share = Max8(one - distance, zero);
+    float* cell = histograms + offset[i];
+    float* below = cell + kPaddedGrid * kDescriptorOrientations;
+    Store8(cell, Load8(cell) + w00[i] * share);
+    Store8(cell + kDescriptorOrientations, Load8(cell + kDescriptorOrientations) + w01[i] * share);
+    Store8(below, Load8(below) + w10[i] * share);
+    Store8(below + kDescriptorOrientations,
+           Load8(below + kDescriptorOrientations) + w11[i] * share);
   }
 }
 
@@ -829,32 +892,40 @@ void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float 
 // orientation) bins, under a Gaussian window of two bins' sigma; then unit-L2, clamped at
 // 0.2 and renormalised against lighting changes.
 void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_scale,
-                     float orientation, std::vector<float>* samples, std::vector<int32_t>* offsets,
-                     float* descriptor) {
+                     float orientation, FrameScratch* scratch, float* descriptor) {
   const float bin_side = kDescriptorMagnification * octave_scale;
   const float half_grid = 0.5f * kDescriptorGrid;
   const int radius = DescriptorRadius(octave_scale, gradient.size());
   const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
-  std::vector<float> weights_x, weights_y;
-  GaussianWeights(radius, x - xi, half_grid * bin_side, &weights_x);
-  GaussianWeights(radius, y - yi, half_grid * bin_side, &weights_y);
+  const float* weights_x =
+      GaussianWeights(radius, x - xi, half_grid * bin_side, &scratch->weights_x);
+  const float* weights_y =
+      GaussianWeights(radius, y - yi, half_grid * bin_side, &scratch->weights_y);
 
-  const float cos_t = std::cos(orientation) / bin_side;
-  const float sin_t = std::sin(orientation) / bin_side;
-  // Each sample adds to the 2 x 2 (column, row) cells around it in the padded histogram,
-  // to each cell's two orientation bins around its own: one vector of eight orientation
-  // weights, scaled per cell. The padding is dropped afterwards.
+  // The samples of a batch of rows first (DescriptorSamples), then their adds
+  // (AddDescriptorSamples): templeRing's descriptors took 28 % of extraction's perf samples
+  // with the adds row by row, 25 % in batches (all rows in one batch measured the same as
+  // these, with buffers for (2 radius + 1)^2 samples). A row has at most 2 radius + 1
+  // samples, and a block's padding after its last.
+  constexpr int kSamplesPerBatch = 256;
+  const int max_samples = kSamplesPerBatch + 2 * radius + kSampleLanes;
+  float* sample_arrays =
+      FrameScratch::Reserve(5 * static_cast<size_t>(max_samples), &scratch->samples);
+  const DescriptorSampleArrays arrays{FrameScratch::Reserve(max_samples, &scratch->offsets),
+                                      sample_arrays,
+                                      sample_arrays + max_samples,
+                                      sample_arrays + 2 * max_samples,
+                                      sample_arrays + 3 * max_samples,
+                                      sample_arrays + 4 * max_samples};
   // kDescriptorCopies copies, taken in turn along a row (see there), summed at the end.
   alignas(32) std::array<float, kDescriptorCopies * kDescriptorHistogramSize> histogram{};
-  const Float8 bin_index = {0, 1, 2, 3, 4, 5, 6, 7};
-  const Float8 zero = {}, one = zero + 1.0f, num_bins = zero + kDescriptorOrientations;
+  int num_samples = 0;
+  const float cos_t = std::cos(orientation) / bin_side;
+  const float sin_t = std::sin(orientation) / bin_side;
   for (int dy = -radius; dy <= radius; ++dy) {
     const int r = yi + dy;
     if (r < 1 || r >= gradient.rows - 1) continue;
-    const float* mag_row = gradient.Magnitude(r);
-    const float* ang_row = gradient.Angle(r);
     const float oy = static_cast<float>(r) - y;
-    const float weight_y = weights_y[dy + radius];
     // The columns whose samples fall in the rotated window: |u|, |v| < half_grid + 0.5 bins,
     // an interval per row where the two strips cross.
     float ox_low = -radius - 1.0f, ox_high = radius + 1.0f;
@@ -876,50 +947,33 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
     const int c_begin = std::max({1, xi - radius, static_cast<int>(std::floor(x + ox_low))});
     const int c_end =
         std::min({gradient.cols - 2, xi + radius, static_cast<int>(std::ceil(x + ox_high))});
-    // First the bins and weights of the row's samples, in a loop without branches that
-    // the compiler vectorises; then their adds, which cannot be.
     const int count = c_end - c_begin + 1;
     if (count <= 0) continue;
-    samples->resize(5 * static_cast<size_t>(count));
-    offsets->resize(count);
-    int32_t* sample_offset = offsets->data();
-    float* sample_orientation = samples->data();
-    float* sample_w00 = sample_orientation + count;
-    float* sample_w01 = sample_w00 + count;
-    float* sample_w10 = sample_w01 + count;
-    float* sample_w11 = sample_w10 + count;
     const float bin_x_begin =
         cos_t * (static_cast<float>(c_begin) - x) + sin_t * oy + half_grid - 0.5f;
     const float bin_y_begin =
         -sin_t * (static_cast<float>(c_begin) - x) + cos_t * oy + half_grid - 0.5f;
-    DescriptorSamples(count, bin_x_begin, bin_y_begin, cos_t, -sin_t, ang_row + c_begin,
-                      orientation, mag_row + c_begin, weights_x.data() + (c_begin - xi + radius),
-                      weight_y, sample_offset, sample_orientation, sample_w00, sample_w01,
-                      sample_w10, sample_w11);
-    for (int i = 0; i < count; ++i) {
-      // Bin b takes 1 - (circular distance from the sample's orientation), when positive:
-      // 1 - fo for the bin below, fo for the one above (bin 0 above bin 7).
-      Float8 distance = Abs8(bin_index - sample_orientation[i]);
-      distance = Min8(distance, num_bins - distance);
-      const Float8 share = Max8(one - distance, zero);
-      float* cell = histogram.data() + sample_offset[i];
-      float* below = cell + kPaddedGrid * kDescriptorOrientations;
-      Store8(cell, Load8(cell) + sample_w00[i] * share);
-      Store8(cell + kDescriptorOrientations,
-             Load8(cell + kDescriptorOrientations) + sample_w01[i] * share);
-      Store8(below, Load8(below) + sample_w10[i] * share);
-      Store8(below + kDescriptorOrientations,
-             Load8(below + kDescriptorOrientations) + sample_w11[i] * share);
+    DescriptorSamples(count, bin_x_begin, bin_y_begin, cos_t, -sin_t, gradient.Angle(r) + c_begin,
+                      orientation, gradient.Magnitude(r) + c_begin,
+                      weights_x + (c_begin - xi + radius), weights_y[dy + radius],
+                      arrays.Advanced(num_samples));
+    num_samples += count;
+    if (num_samples >= kSamplesPerBatch) {
+      AddDescriptorSamples(arrays, num_samples, histogram.data());
+      num_samples = 0;
     }
   }
+  AddDescriptorSamples(arrays, num_samples, histogram.data());
+
   for (int by = 0; by < kDescriptorGrid; ++by) {
     for (int bx = 0; bx < kDescriptorGrid; ++bx) {
       const float* cell =
           histogram.data() + ((by + 1) * kPaddedGrid + (bx + 1)) * kDescriptorOrientations;
       float* out = descriptor + (by * kDescriptorGrid + bx) * kDescriptorOrientations;
-      static_assert(kDescriptorCopies == 4);
+      static_assert(kDescriptorCopies == 8);
       const auto copy = [cell](int k) { return Load8(cell + k * kDescriptorHistogramSize); };
-      Store8(out, (copy(0) + copy(1)) + (copy(2) + copy(3)));
+      Store8(out, ((copy(0) + copy(1)) + (copy(2) + copy(3))) +
+                      ((copy(4) + copy(5)) + (copy(6) + copy(7))));
     }
   }
 
@@ -1067,13 +1121,13 @@ void ComputeNativeSift(const cv::Mat& gray, const NativeSiftOptions& options,
       const Gradient& gradient = layer_gradient.Through(yi - radius, yi + radius);
       for (const float orientation :
            FrameOrientations(gradient, extremum.x, extremum.y, extremum.octave_scale,
-                             options.max_num_orientations, &space.samples)) {
+                             options.max_num_orientations, &space.frame_scratch)) {
         Detection& detection = detections.emplace_back(extremum);
         detection.frame.orientation = orientation;
         unranked_descriptors.resize(unranked_descriptors.size() + kDescriptorSize);
         FrameDescriptor(
-            gradient, extremum.x, extremum.y, extremum.octave_scale, orientation, &space.samples,
-            &space.offsets,
+            gradient, extremum.x, extremum.y, extremum.octave_scale, orientation,
+            &space.frame_scratch,
             unranked_descriptors.data() + unranked_descriptors.size() - kDescriptorSize);
       }
     }
