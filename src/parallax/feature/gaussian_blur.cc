@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "parallax/feature/float8.h"
 #include "parallax/util/check.h"
@@ -129,6 +130,8 @@ void HorizontalRow(const float* row, const Float8* taps, int radius, int width, 
 // and each returns the first column it left to them.
 constexpr int kVerticalBlock512 = 2 * kVerticalBlock;
 constexpr int kHorizontalBlock512 = 2 * kHorizontalBlock;
+// Columns the AVX-512 horizontal pass reads on either side of a block (its largest radius).
+constexpr int kHorizontalPadding = 16;
 
 template <int kFirst, int kLast>
 __attribute__((target("avx512f"), always_inline)) inline void AddRow512(
@@ -163,8 +166,66 @@ __attribute__((target("avx512f"), flatten)) int VerticalStepAvx512(const float* 
   return x;
 }
 
-__attribute__((target("avx512f"))) int HorizontalRowAvx512(const float* row, const Float8* taps,
-                                                           int radius, int width, float* out) {
+// Columns kShift .. kShift + 15 of the 32 in (low, high), kShift in [0, 16].
+template <int kShift>
+__attribute__((target("avx512f"), always_inline)) inline __m512 Shifted(__m512 low, __m512 high) {
+  if constexpr (kShift == 0) {
+    return low;
+  } else if constexpr (kShift == 16) {
+    return high;
+  } else {
+    // The masked form with every lane: GCC 12's unmasked one warns of an uninitialised
+    // operand it makes itself.
+    return _mm512_castsi512_ps(_mm512_maskz_alignr_epi32(0xffff, _mm512_castps_si512(high),
+                                                         _mm512_castps_si512(low), kShift));
+  }
+}
+
+// Tap i of the horizontal pass for 4 vectors of columns, from their `columns` and one vector
+// on either side.
+template <int i>
+__attribute__((target("avx512f"), always_inline)) inline void AddShiftedTap(
+    const Float8* taps, const __m512 (&columns)[6], __m512 (&acc)[4]) {
+  const __m512 k = _mm512_set1_ps(taps[i][0]);
+  for (int v = 0; v < 4; ++v) {
+    const __m512 left = Shifted<16 - i>(columns[v], columns[v + 1]);
+    const __m512 right = Shifted<i>(columns[v + 1], columns[v + 2]);
+    acc[v] = _mm512_fmadd_ps(k, _mm512_add_ps(left, right), acc[v]);
+  }
+}
+
+// The horizontal pass of a block with the radius a constant: its 4 vectors of columns and
+// one on either side are loaded once, and each tap's columns are shifted out of them
+// (valignd); loaded at each tap's offset, 15 loads in 16 split a cache line, and those loads
+// bound the pass (templeRing, one thread: its perf samples 743-808 -> 441-503, three
+// alternating runs each). Summed as HorizontalRow sums.
+template <int kRadius>
+__attribute__((target("avx512f"), flatten)) int HorizontalRowAvx512(const float* row,
+                                                                    const Float8* taps, int width,
+                                                                    float* out) {
+  static_assert(kRadius >= 1 && kRadius <= kHorizontalPadding);
+  int x = 0;
+  for (; x + kHorizontalBlock512 <= width; x += kHorizontalBlock512) {
+    const float* centre = row + x;
+    __m512 columns[6];  // Columns 16 j - 16 .. 16 j - 1 from the centre.
+    for (int j = 0; j < 6; ++j) columns[j] = _mm512_loadu_ps(centre + 16 * j - 16);
+    __m512 acc[4];
+    const __m512 k0 = _mm512_set1_ps(taps[0][0]);
+    for (int v = 0; v < 4; ++v) acc[v] = _mm512_mul_ps(k0, columns[v + 1]);
+    [&]<int... kTapsAfterFirst>(std::integer_sequence<int, kTapsAfterFirst...>)
+        __attribute__((target("avx512f"))) {
+      (AddShiftedTap<kTapsAfterFirst + 1>(taps, columns, acc), ...);
+    }
+    (std::make_integer_sequence<int, kRadius>{});
+    for (int v = 0; v < 4; ++v) _mm512_storeu_ps(out + x + 16 * v, acc[v]);
+  }
+  return x;
+}
+
+// The horizontal pass for any radius: each tap's columns loaded at its offset.
+__attribute__((target("avx512f"))) int HorizontalRowAvx512Loads(const float* row,
+                                                                const Float8* taps, int radius,
+                                                                int width, float* out) {
   int x = 0;
   for (; x + kHorizontalBlock512 <= width; x += kHorizontalBlock512) {
     const float* centre = row + x;
@@ -184,6 +245,20 @@ __attribute__((target("avx512f"))) int HorizontalRowAvx512(const float* row, con
     for (int v = 0; v < 4; ++v) _mm512_storeu_ps(out + x + 16 * v, acc[v]);
   }
   return x;
+}
+
+// The horizontal pass in AVX-512 registers: by shifts where the radius allows.
+int HorizontalRowAvx512(const float* row, const Float8* taps, int radius, int width, float* out) {
+  using Pass = int (*)(const float*, const Float8*, int, float*);
+  static constexpr auto kPasses =
+      []<int... kRadiusLess1>(std::integer_sequence<int, kRadiusLess1...>) {
+    return std::array<Pass, sizeof...(kRadiusLess1)>{&HorizontalRowAvx512<kRadiusLess1 + 1>...};
+  }
+  (std::make_integer_sequence<int, kHorizontalPadding>{});
+  if (radius < 1 || radius > kHorizontalPadding) {
+    return HorizontalRowAvx512Loads(row, taps, radius, width, out);
+  }
+  return kPasses[radius - 1](row, taps, width, out);
 }
 #else
 // No AVX-512 code in this build (BlurHasAvx512() is false): every column is the passes' above.
@@ -267,10 +342,13 @@ void WindowedGaussianBlur::Blur(cv::Rect window, float* out, size_t out_stride,
   const int low = std::min(window.x - radius, vertical_begin);
   const int high = std::max(window_end_col + radius, vertical_begin + width);
   const int stride = high - low;
-  vertical_.resize(kRowsPerStep * static_cast<size_t>(stride));
+  // With kHorizontalPadding floats before the first row and after the last, which the
+  // AVX-512 horizontal pass loads (and leaves out of its sums).
+  vertical_.resize(kRowsPerStep * static_cast<size_t>(stride) + 2 * kHorizontalPadding);
+  float* const vertical = vertical_.data() + kHorizontalPadding;
   std::array<float*, kRowsPerStep> vertical_rows;
   for (int q = 0; q < kRowsPerStep; ++q) {
-    vertical_rows[q] = vertical_.data() + q * stride + (vertical_begin - low);
+    vertical_rows[q] = vertical + q * stride + (vertical_begin - low);
   }
   const int window_end = window.y + window.height;
   for (int r = window.y; r < window_end; r += kRowsPerStep) {
@@ -281,7 +359,7 @@ void WindowedGaussianBlur::Blur(cv::Rect window, float* out, size_t out_stride,
         avx512_ ? VerticalStepAvx512(inputs_.data(), kernel, taps, width, vertical_rows.data()) : 0;
     VerticalStep(inputs_.data(), kernel, taps, width, vertical_rows.data(), vertical_done);
     for (int q = 0; q < kRowsPerStep && r + q < window_end; ++q) {
-      float* row = vertical_.data() + q * stride;  // row[x - low] is column x.
+      float* row = vertical + q * stride;  // row[x - low] is column x.
       for (int x = window.x - radius; x < 0; ++x) row[x - low] = row[-low];
       for (int x = cols; x < window_end_col + radius; ++x) row[x - low] = row[cols - 1 - low];
       const float* centre = row + (window.x - low);
