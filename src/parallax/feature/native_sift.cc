@@ -31,6 +31,10 @@ constexpr int kMaxRefinementFits = 5;  // Samples an extremum's quadratic fit ma
 constexpr float kMoveOffset = 0.6f;
 constexpr float kMaxFinalOffset = 1.5f;
 constexpr int kOrientationBins = 36;
+// Orientation histograms are padded by a bin on each side (FrameOrientations), and
+// successive samples of a row take turns adding to kOrientationCopies copies of them.
+constexpr int kPaddedOrientationBins = kOrientationBins + 2;
+constexpr int kOrientationCopies = 4;
 constexpr float kOrientationWindow = 1.5f;  // Window sigma, in units of the frame's scale.
 constexpr int kOrientationSmoothing = 6;    // Passes of a circular [1 1 1] / 3 box filter.
 constexpr float kOrientationPeakRatio = 0.8f;
@@ -54,7 +58,7 @@ static_assert((kDescriptorCopies & (kDescriptorCopies - 1)) == 0, "a power of tw
 // A descriptor's samples are computed a Float8 at a time (DescriptorSamples), and sample
 // i's copy is i % kDescriptorCopies, the same in every block.
 constexpr int kSampleLanes = 8;
-static_assert(kSampleLanes % kDescriptorCopies == 0);
+static_assert(kSampleLanes % kDescriptorCopies == 0 && kSampleLanes % kOrientationCopies == 0);
 static_assert(kDescriptorSize == 128);
 static_assert(kDescriptorOrientations == 8);
 
@@ -702,20 +706,28 @@ const float* GaussianWeights(int radius, float fraction, float sigma, std::vecto
   return w;
 }
 
-// The orientation-histogram entries of `count` samples along a row: for each, the padded
-// histogram's index of the bin below its angle (bin k of 36 centred on (k + 0.5) 10 degrees
-// is at k + 1; index 0 is bin 35 and index 37 bin 0, folded in afterwards), its share of the
-// bin above, and its weight. Vectorised as DescriptorSamples is.
-void OrientationSamples(int count, const float* __restrict angle, const float* __restrict magnitude,
-                        const float* __restrict window_x, float window_y,
-                        float* __restrict sample_bin, float* __restrict sample_share,
-                        float* __restrict sample_weight) {
-  for (int i = 0; i < count; ++i) {
-    const float bin = kOrientationBins * angle[i] / kTwoPi - 0.5f;
-    const float lower = std::floor(bin);
-    sample_share[i] = bin - lower;
-    sample_bin[i] = lower + 1.0f;  // An exact integer in [0, 36].
-    sample_weight[i] = magnitude[i] * window_x[i] * window_y;
+// The orientation-histogram entries of `count` samples along a row, eight at a time (reading
+// and writing past `count` as DescriptorSamples does): for each, the offset in the padded
+// histograms of the bin below its angle (bin k of 36 centred on (k + 0.5) 10 degrees is at
+// k + 1; index 0 is bin 35 and index 37 bin 0, folded in afterwards; in copy
+// i % kOrientationCopies), and its weight's parts for that bin and the one above.
+void OrientationSamples(int count, const float* angle, const float* magnitude,
+                        const float* window_x, float window_y, int32_t* sample_offset,
+                        float* sample_lower, float* sample_upper) {
+  const Float8 zero = {};
+  const Int8 copy_offset =
+      (Int8{0, 1, 2, 3, 4, 5, 6, 7} & (kOrientationCopies - 1)) * kPaddedOrientationBins;
+  for (int i = 0; i < count; i += kSampleLanes) {
+    const Float8 bin = kOrientationBins * Load8(angle + i) / kTwoPi - 0.5f;
+    const Float8 lower = Floor8(bin);
+    const Float8 share = bin - lower;
+    // lower + 1 is an exact integer in [0, 36].
+    const Int8 offset = __builtin_convertvector(lower + 1.0f, Int8) + copy_offset;
+    std::memcpy(sample_offset + i, &offset, sizeof(offset));
+    const Float8 weight = (Load8(magnitude + i) * Load8(window_x + i)) * (zero + window_y);
+    const Float8 upper = share * weight;
+    Store8(sample_upper + i, upper);
+    Store8(sample_lower + i, weight - upper);
   }
 }
 
@@ -730,14 +742,17 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
   const float* weights_x = GaussianWeights(radius, x - xi, window_sigma, &scratch->weights_x);
   const float* weights_y = GaussianWeights(radius, y - yi, window_sigma, &scratch->weights_y);
 
-  // Padded by a bin on each side; two copies, for even and odd columns, so that one
-  // sample's adds need not wait for the last one's.
-  constexpr int kPaddedBins = kOrientationBins + 2;
-  std::array<float, 2 * kPaddedBins> padded{};
-  float* sample_bin =
-      FrameScratch::Reserve(3 * static_cast<size_t>(2 * radius + 1), &scratch->samples);
-  float* sample_share = sample_bin + (2 * radius + 1);
-  float* sample_weight = sample_share + (2 * radius + 1);
+  // Every row's samples first (OrientationSamples), then their adds. Each sample adds to
+  // two bins: in two histograms (one for the bin below, one for the bin above), so that each
+  // add is a float of its own; both in one, the compiler paired them (one 8-byte add), and
+  // a pair's load that overlapped an earlier pair's store half waited for it to leave the
+  // store buffer.
+  const size_t max_samples =
+      static_cast<size_t>(2 * radius + 1) * (2 * radius + 1) + kSampleLanes - 1;
+  float* sample_lower = FrameScratch::Reserve(2 * max_samples, &scratch->samples);
+  float* sample_upper = sample_lower + max_samples;
+  int32_t* sample_offset = FrameScratch::Reserve(max_samples, &scratch->offsets);
+  int num_samples = 0;
   for (int dy = -radius; dy <= radius; ++dy) {
     const int r = yi + dy;
     if (r < 1 || r >= gradient.rows - 1) continue;
@@ -751,20 +766,31 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
     const int count = c_end - c_begin + 1;
     if (count <= 0) continue;
     OrientationSamples(count, gradient.Angle(r) + c_begin, gradient.Magnitude(r) + c_begin,
-                       weights_x + (c_begin - xi + radius), weights_y[dy + radius], sample_bin,
-                       sample_share, sample_weight);
-    for (int i = 0; i < count; ++i) {
-      float* bin = padded.data() + (i & 1) * kPaddedBins + static_cast<int>(sample_bin[i]);
-      const float upper = sample_share[i] * sample_weight[i];
-      bin[0] += sample_weight[i] - upper;
-      bin[1] += upper;
+                       weights_x + (c_begin - xi + radius), weights_y[dy + radius],
+                       sample_offset + num_samples, sample_lower + num_samples,
+                       sample_upper + num_samples);
+    num_samples += count;
+  }
+  constexpr int kCopiesSize = kOrientationCopies * kPaddedOrientationBins;
+  std::array<float, kCopiesSize> lower_bins{}, upper_bins{};
+  float* upper_above = upper_bins.data() + 1;
+  for (int i = 0; i < num_samples; ++i) {
+    lower_bins[sample_offset[i]] += sample_lower[i];
+    upper_above[sample_offset[i]] += sample_upper[i];
+  }
+  std::array<float, kPaddedOrientationBins> padded;
+  for (int b = 0; b < kPaddedOrientationBins; ++b) {
+    float sum = 0;
+    for (int c = 0; c < kOrientationCopies; ++c) {
+      sum +=
+          lower_bins[c * kPaddedOrientationBins + b] + upper_bins[c * kPaddedOrientationBins + b];
     }
+    padded[b] = sum;
   }
   std::array<float, kOrientationBins> histogram;
-  for (int b = 0; b < kOrientationBins; ++b)
-    histogram[b] = padded[b + 1] + padded[kPaddedBins + b + 1];
-  histogram[kOrientationBins - 1] += padded[0] + padded[kPaddedBins];
-  histogram[0] += padded[kPaddedBins - 1] + padded[2 * kPaddedBins - 1];
+  for (int b = 0; b < kOrientationBins; ++b) histogram[b] = padded[b + 1];
+  histogram[kOrientationBins - 1] += padded[0];
+  histogram[0] += padded[kPaddedOrientationBins - 1];
   // Each pass from a copy with the ends wrapped, which the compiler vectorises: in place,
   // each bin waited for the one before (and its division).
   std::array<float, kOrientationBins + 2> wrapped;
