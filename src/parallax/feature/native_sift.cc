@@ -83,6 +83,22 @@ struct Gradient {
   float* MutableAngle(int r) { return angle_ring.ptr<float>(r & ring_mask); }
 };
 
+// One row of a descriptor's samples (FrameDescriptor): the bin its first sample falls in,
+// where its columns start in the gradient and the window, and its first sample's index.
+struct DescriptorRow {
+  float bin_x, bin_y;
+  const float* angle;
+  const float* magnitude;
+  const float* window_x;
+  float window_y;
+  int first_sample;
+};
+
+// Eight samples of a row, from its column `column` on.
+struct DescriptorBlock {
+  int row, column;
+};
+
 // The buffers that each frame's orientations and descriptor are computed in, kept from frame
 // to frame: allocating them for each frame was a percent of extraction. Grown, never shrunk
 // (Reserve): a vector's resize up from a smaller frame's size would zero what it adds.
@@ -90,6 +106,8 @@ struct FrameScratch {
   std::vector<float> weights_x, weights_y;  // The Gaussian window (GaussianWeights).
   std::vector<float> samples;               // Samples' bins and weights, array by array.
   std::vector<int32_t> offsets;             // Their histogram cells (FrameDescriptor).
+  std::vector<DescriptorRow> rows;          // FrameDescriptor's.
+  std::vector<DescriptorBlock> blocks;
 
   template <typename T>
   static T* Reserve(size_t size, std::vector<T>* buffer) {
@@ -828,42 +846,41 @@ std::vector<float> FrameOrientations(const Gradient& gradient, float x, float y,
 struct DescriptorSampleArrays {
   int32_t* offset;
   float *orientation, *w00, *w01, *w10, *w11;
-
-  DescriptorSampleArrays Advanced(size_t n) const {
-    return {offset + n, orientation + n, w00 + n, w01 + n, w10 + n, w11 + n};
-  }
 };
 
-// The descriptor bins and weights of `count` samples along a row, eight at a time: sample i
-// is at bin (bin_x + i step_x, bin_y + i step_y), and weighs nothing outside the window. For
-// each sample, the offset in the histograms of its lowest (column, row) cell (in copy
-// i % kDescriptorCopies), its weight for each of the 2 x 2 cells from there, and its
-// orientation in bins, in [0, 8). The last block reads and writes up to kSampleLanes - 1
-// samples past `count` (the rings, the window and `out` are padded for them; what it writes
-// there the next row overwrites or nothing reads). The compiler's vectorisation of this loop
-// ended each row in a scalar tail: with the adds after it, row by row, that tail and the
-// rows' other overhead were nearly half of FrameDescriptor's perf samples.
-void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float step_y,
-                       const float* angle, float orientation, const float* magnitude,
-                       const float* window_x, float window_y, const DescriptorSampleArrays& out) {
+// The descriptor bins and weights of a frame's samples, a block of eight at a time: sample i
+// of a row is at bin (bin_x + i step_x, bin_y + i step_y), and weighs nothing outside the
+// window. For each sample, the offset in the histograms of its lowest (column, row) cell (in
+// copy i % kDescriptorCopies), its weight for each of the 2 x 2 cells from there, and its
+// orientation in bins, in [0, 8). A row's last block reads and writes up to kSampleLanes - 1
+// samples past its end (the rings, the window and `out` are padded for them; what it writes
+// there the next row's first block overwrites, or nothing reads). One loop over every block
+// of the frame: a loop per row mispredicted its exit each row, and the compiler's
+// vectorisation of it ended each row in a scalar tail.
+void DescriptorSamples(const DescriptorRow* rows, const DescriptorBlock* blocks, int num_blocks,
+                       float step_x, float step_y, float orientation,
+                       const DescriptorSampleArrays& out) {
   constexpr float kBinsPerRadian = kDescriptorOrientations / kTwoPi;
   constexpr float kLastOrientationBin = 7.99999952f;  // The float below 8.
   const Float8 zero = {}, lane = {0, 1, 2, 3, 4, 5, 6, 7};
   // Sample i's copy: the same lane by lane, in every block of eight.
   const Int8 copy_offset = Int8{0, 1, 2, 3, 4, 5, 6, 7} * kDescriptorHistogramSize;
-  for (int i = 0; i < count; i += kSampleLanes) {
+  for (int b = 0; b < num_blocks; ++b) {
+    const DescriptorRow& row = rows[blocks[b].row];
+    const int i = blocks[b].column;
+    const int sample = row.first_sample + i;
     const Float8 steps = lane + static_cast<float>(i);
-    const Float8 x = MulAdd8(steps, zero + step_x, zero + bin_x);
-    const Float8 y = MulAdd8(steps, zero + step_y, zero + bin_y);
+    const Float8 x = MulAdd8(steps, zero + step_x, zero + row.bin_x);
+    const Float8 y = MulAdd8(steps, zero + step_y, zero + row.bin_y);
     const Int8 inside = (x > -1.0f) & (x < kDescriptorGrid) & (y > -1.0f) & (y < kDescriptorGrid);
     // Orientation bins count the gradient's angle from the frame's the other way round
     // (as with y up): Lowe's layout, which OpenCV and COLMAP store, so that descriptors of
     // either SIFT in one database compare bin for bin (VLFeat's count the other way).
-    Float8 relative = orientation - Load8(angle + i);
+    Float8 relative = orientation - Load8(row.angle + i);
     relative += relative < zero ? zero + kTwoPi : zero;
     // Rounding can put an angle just under 2 pi at bin 8.0: held just below it (its weight
     // then goes to bin 7, and the rest, none, to bin 0).
-    Store8(out.orientation + i, Min8(relative * kBinsPerRadian, zero + kLastOrientationBin));
+    Store8(out.orientation + sample, Min8(relative * kBinsPerRadian, zero + kLastOrientationBin));
     // floor, not truncation of bin + 1: that sum can round up to the next integer. Outside
     // the window the bins are meaningless (and never used): clamped, so the conversions
     // stay in range.
@@ -871,16 +888,16 @@ void DescriptorSamples(int count, float bin_x, float bin_y, float step_x, float 
     const Float8 fx = x - x0, fy = y - y0;
     const Float8 cell = MulAdd8(y0 + 1.0f, zero + kPaddedGrid, x0 + 1.0f);  // Exact integers.
     const Int8 offset = __builtin_convertvector(cell, Int8) * kDescriptorOrientations + copy_offset;
-    std::memcpy(out.offset + i, &offset, sizeof(offset));
+    std::memcpy(out.offset + sample, &offset, sizeof(offset));
     // The sample's weight split over the 2 x 2 cells around it (bilinearly).
-    const Float8 weight =
-        ((inside ? zero + window_y : zero) * Load8(magnitude + i)) * Load8(window_x + i);
+    const Float8 weight = ((inside ? zero + row.window_y : zero) * Load8(row.magnitude + i)) *
+                          Load8(row.window_x + i);
     const Float8 w1 = weight * fy, w0 = weight - w1;
     const Float8 w11 = w1 * fx, w01 = w0 * fx;
-    Store8(out.w00 + i, w0 - w01);
-    Store8(out.w01 + i, w01);
-    Store8(out.w10 + i, w1 - w11);
-    Store8(out.w11 + i, w11);
+    Store8(out.w00 + sample, w0 - w01);
+    Store8(out.w01 + sample, w01);
+    Store8(out.w10 + sample, w1 - w11);
+    Store8(out.w11 + sample, w11);
   }
 }
 
@@ -928,23 +945,12 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
   const float* weights_y =
       GaussianWeights(radius, y - yi, half_grid * bin_side, &scratch->weights_y);
 
-  // The samples of a batch of rows first (DescriptorSamples), then their adds
-  // (AddDescriptorSamples): templeRing's descriptors took 28 % of extraction's perf samples
-  // with the adds row by row, 25 % in batches (all rows in one batch measured the same as
-  // these, with buffers for (2 radius + 1)^2 samples). A row has at most 2 radius + 1
-  // samples, and a block's padding after its last.
-  constexpr int kSamplesPerBatch = 256;
-  const int max_samples = kSamplesPerBatch + 2 * radius + kSampleLanes;
-  float* sample_arrays =
-      FrameScratch::Reserve(5 * static_cast<size_t>(max_samples), &scratch->samples);
-  const DescriptorSampleArrays arrays{FrameScratch::Reserve(max_samples, &scratch->offsets),
-                                      sample_arrays,
-                                      sample_arrays + max_samples,
-                                      sample_arrays + 2 * max_samples,
-                                      sample_arrays + 3 * max_samples,
-                                      sample_arrays + 4 * max_samples};
-  // kDescriptorCopies copies, taken in turn along a row (see there), summed at the end.
-  alignas(32) std::array<float, kDescriptorCopies * kDescriptorHistogramSize> histogram{};
+  // The rows first, then the samples of all of them (DescriptorSamples), then their adds
+  // (AddDescriptorSamples).
+  std::vector<DescriptorRow>& rows = scratch->rows;
+  std::vector<DescriptorBlock>& blocks = scratch->blocks;
+  rows.clear();
+  blocks.clear();
   int num_samples = 0;
   const float cos_t = std::cos(orientation) / bin_side;
   const float sin_t = std::sin(orientation) / bin_side;
@@ -979,16 +985,26 @@ void FrameDescriptor(const Gradient& gradient, float x, float y, float octave_sc
         cos_t * (static_cast<float>(c_begin) - x) + sin_t * oy + half_grid - 0.5f;
     const float bin_y_begin =
         -sin_t * (static_cast<float>(c_begin) - x) + cos_t * oy + half_grid - 0.5f;
-    DescriptorSamples(count, bin_x_begin, bin_y_begin, cos_t, -sin_t, gradient.Angle(r) + c_begin,
-                      orientation, gradient.Magnitude(r) + c_begin,
-                      weights_x + (c_begin - xi + radius), weights_y[dy + radius],
-                      arrays.Advanced(num_samples));
+    const int row = static_cast<int>(rows.size());
+    rows.push_back({bin_x_begin, bin_y_begin, gradient.Angle(r) + c_begin,
+                    gradient.Magnitude(r) + c_begin, weights_x + (c_begin - xi + radius),
+                    weights_y[dy + radius], num_samples});
+    for (int i = 0; i < count; i += kSampleLanes) blocks.push_back({row, i});
     num_samples += count;
-    if (num_samples >= kSamplesPerBatch) {
-      AddDescriptorSamples(arrays, num_samples, histogram.data());
-      num_samples = 0;
-    }
   }
+
+  const size_t max_samples = static_cast<size_t>(num_samples) + kSampleLanes - 1;
+  float* sample_arrays = FrameScratch::Reserve(5 * max_samples, &scratch->samples);
+  const DescriptorSampleArrays arrays{FrameScratch::Reserve(max_samples, &scratch->offsets),
+                                      sample_arrays,
+                                      sample_arrays + max_samples,
+                                      sample_arrays + 2 * max_samples,
+                                      sample_arrays + 3 * max_samples,
+                                      sample_arrays + 4 * max_samples};
+  DescriptorSamples(rows.data(), blocks.data(), static_cast<int>(blocks.size()), cos_t, -sin_t,
+                    orientation, arrays);
+  // kDescriptorCopies copies, taken in turn along a row (see there), summed at the end.
+  alignas(32) std::array<float, kDescriptorCopies * kDescriptorHistogramSize> histogram{};
   AddDescriptorSamples(arrays, num_samples, histogram.data());
 
   for (int by = 0; by < kDescriptorGrid; ++by) {
