@@ -185,4 +185,12 @@ int Run(int argc, char** argv) {
 }  // namespace
 }  // namespace parallax
 
-int main(int argc, char** argv) { return parallax::Run(argc, argv); }
+int main(int argc, char** argv) {
+  // An unreadable image or model: one line and a non-zero exit, not std::terminate.
+  try {
+    return parallax::Run(argc, argv);
+  } catch (const std::exception& error) {
+    std::cerr << "sift_quality: " << error.what() << std::endl;
+    return 1;
+  }
+}
