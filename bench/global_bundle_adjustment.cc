@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_tool_main.h"
 #include "parallax/estimators/bundle_adjustment.h"
 #include "parallax/math/random.h"
 #include "parallax/scene/colmap_io.h"
@@ -107,11 +108,5 @@ int Run(int argc, char** argv) {
 }  // namespace parallax
 
 int main(int argc, char** argv) {
-  // An unreadable image or model: one line and a non-zero exit, not std::terminate.
-  try {
-    return parallax::Run(argc, argv);
-  } catch (const std::exception& error) {
-    std::cerr << "global_bundle_adjustment: " << error.what() << std::endl;
-    return 1;
-  }
+  return parallax::RunBenchTool("global_bundle_adjustment", parallax::Run, argc, argv);
 }

@@ -24,6 +24,7 @@
 #include <tuple>
 #include <vector>
 
+#include "bench_tool_main.h"
 #include "parallax/feature/matcher.h"
 #include "parallax/feature/sift.h"
 #include "parallax/image/image_reader.h"
@@ -186,11 +187,5 @@ int Run(int argc, char** argv) {
 }  // namespace parallax
 
 int main(int argc, char** argv) {
-  // An unreadable image or model: one line and a non-zero exit, not std::terminate.
-  try {
-    return parallax::Run(argc, argv);
-  } catch (const std::exception& error) {
-    std::cerr << "sift_quality: " << error.what() << std::endl;
-    return 1;
-  }
+  return parallax::RunBenchTool("sift_quality", parallax::Run, argc, argv);
 }
