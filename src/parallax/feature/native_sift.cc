@@ -325,7 +325,8 @@ void LayOutBuffers(cv::Size input_size, cv::Size base_size, const NativeSiftOpti
       static_cast<int>(std::bit_ceil(static_cast<unsigned>(GradientRingRows(options, base_size))));
   space->ring_mask = ring_rows - 1;
   // A layer of fewer rows has each in a row of its own (r & ring_mask == r). Padded by a
-  // block of samples, which DescriptorSamples may read past a row's last column.
+  // block of samples, which DescriptorSamples and OrientationSamples may read past a row's
+  // last column.
   const cv::Size ring_size(base_size.width + kSampleLanes, std::min(ring_rows, base_size.height));
   layout.emplace_back(&space->magnitude_ring, ring_size);
   layout.emplace_back(&space->angle_ring, ring_size);
@@ -708,7 +709,8 @@ bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options,
 // changes by exp(-1 / sigma^2) from one to the next; in double, so that the products lose
 // nothing a float keeps (the expf per weight were 1.5 % of extraction).
 const float* GaussianWeights(int radius, float fraction, float sigma, std::vector<float>* weights) {
-  // Zeros after the last weight for DescriptorSamples' last block of a row.
+  // Zeros after the last weight, for the last block of a row in DescriptorSamples and
+  // OrientationSamples.
   float* w = FrameScratch::Reserve(2 * radius + kSampleLanes, weights);
   const double scale = -0.5 / (static_cast<double>(sigma) * sigma);
   const double first = -radius - static_cast<double>(fraction);
@@ -864,7 +866,8 @@ void DescriptorSamples(const DescriptorRow* rows, const DescriptorBlock* blocks,
   constexpr float kLastOrientationBin = 7.99999952f;  // The float below 8.
   const Float8 zero = {}, lane = {0, 1, 2, 3, 4, 5, 6, 7};
   // Sample i's copy: the same lane by lane, in every block of eight.
-  const Int8 copy_offset = Int8{0, 1, 2, 3, 4, 5, 6, 7} * kDescriptorHistogramSize;
+  const Int8 copy_offset =
+      (Int8{0, 1, 2, 3, 4, 5, 6, 7} & (kDescriptorCopies - 1)) * kDescriptorHistogramSize;
   for (int b = 0; b < num_blocks; ++b) {
     const DescriptorRow& row = rows[blocks[b].row];
     const int i = blocks[b].column;
