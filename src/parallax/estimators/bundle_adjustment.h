@@ -29,7 +29,7 @@ const char* LossFunctionName(LossFunctionType type);
 struct BundleAdjustmentOptions {
   BundleAdjustmentSolver solver = BundleAdjustmentSolver::kAuto;
   // 6 per variable pose plus the free intrinsics: 1500 is 250 images, where the dense reduced
-  // matrix (n^2 doubles) stops paying (README, "Dense Schur up to 250 images").
+  // matrix (n^2 doubles) stops paying (docs/defaults.md, "Dense Schur up to 250 images").
   int max_dense_schur_variables = 1500;
   // The sparse Schur LM's linear solve.
   ConjugateGradientOptions conjugate_gradient;
@@ -45,8 +45,8 @@ struct BundleAdjustmentOptions {
   // Parallax's Schur LM (Ceres ignores it) also stops once an accepted step moves no camera
   // by more than this (0: never): rotations in radians, translations over the spread of the
   // camera centres, free intrinsics relative to their value (or to 1 when smaller). Under a
-  // robust loss the points keep creeping long after the cameras have settled (README, "A
-  // robust finish that stops when the cameras do").
+  // robust loss the points keep creeping long after the cameras have settled (docs/defaults.md,
+  // "A robust finish that stops when the cameras do").
   double camera_step_tolerance = 0;
   int num_threads = -1;        // -1: all cores.
   bool print_summary = false;  // Ceres' report to the log at debug level.

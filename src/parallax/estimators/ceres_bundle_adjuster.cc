@@ -16,8 +16,8 @@ namespace parallax {
 namespace {
 
 // Below this many variable images the reduced camera system is small enough for a dense
-// Cholesky, which beats Ceres' block-by-block sparse Schur complement (README, "Dense Schur
-// up to 250 images").
+// Cholesky, which beats Ceres' block-by-block sparse Schur complement (docs/defaults.md,
+// "Dense Schur up to 250 images").
 constexpr size_t kMaxNumImagesForDenseSchur = 150;
 
 // Dense Schur for few images; sparse Schur with the best sparse Cholesky Ceres was built with

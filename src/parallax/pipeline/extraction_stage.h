@@ -14,8 +14,8 @@ namespace parallax {
 
 struct ExtractionStageOptions {
   // The paper's detector (3 layers, edge 10, sigma 1.6) with contrast 0.02 (COLMAP's peak
-  // threshold) instead of its 0.04, for longer tracks and smaller errors (README, "SIFT
-  // contrast 0.02").
+  // threshold) instead of its 0.04, for longer tracks and smaller errors (docs/defaults.md,
+  // "SIFT contrast 0.02").
   SiftExtractionOptions sift{.contrast_threshold = 0.02};
   ImageReaderOptions reader;  // Decoding limits.
   CameraSetupOptions camera;  // How cameras are assigned to images (LoadCameraSetup).

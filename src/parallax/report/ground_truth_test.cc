@@ -172,7 +172,7 @@ TEST(GroundTruth, ReadsTempleRing) {
   EXPECT_NEAR(truth.images[0].camera.FocalLengthX(), 1520.4, 1e-9);
   EXPECT_NEAR(truth.images[0].camera.PrincipalPointY(), 246.87, 1e-9);
   // The cameras sit on a ring about 0.5 m around the temple, whose bounding box centre is
-  // given in the README; each looks towards it.
+  // given in the data set's README.txt; each looks towards it.
   const Eigen::Vector3d temple(0.0277525, 0.0418135, -0.0546675);
   for (const GroundTruthImage& image : truth.images) {
     const Eigen::Vector3d in_cam = image.cam_from_world * temple;

@@ -356,8 +356,8 @@ class IncrementalMapper::ModelBuilder {
     std::vector<std::pair<point2D_t, point3D_t>> links;
     // Every point of the keypoint's track (more than one where its elements disagreed);
     // RANSAC sorts them out. Points its correspondences alone lead to are left out: on the
-    // 300-view aerial survey they cost 9 % in median rotation error (README, "Registration
-    // sees its tracks' points").
+    // 300-view aerial survey they cost 9 % in median rotation error (docs/defaults.md,
+    // "Registration sees its tracks' points").
     const track_t* tracks = input_.correspondence_graph.TracksOfImage(image_id);
     for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
       if (tracks[idx] == kInvalidTrackId) continue;

@@ -36,14 +36,14 @@ struct IncrementalMapperOptions {
   // only the images and what stays constant: every camera in local adjustments, cameras with
   // a prior focal length (and all until three images are registered) in global ones. Squared
   // loss while the model grows and a robust finish is faster and more accurate than either
-  // loss throughout (README, "Defaults worth knowing").
+  // loss throughout (docs/defaults.md, "Squared loss while growing, a robust finish").
   BundleAdjustmentOptions local_ba = [] {  // Around each new image; intrinsics fixed.
     BundleAdjustmentOptions options;
     options.loss_function = LossFunctionType::kTrivial;
     options.max_num_iterations = 25;
     // A step that lowers the cost by less than 3e-5 of it ends the adjustment: the last one
     // or two steps of 1e-6 changed no model's errors, and the final adjustment settles the
-    // points anyway (README, "Local adjustments stop sooner").
+    // points anyway (docs/defaults.md, "Local adjustments stop sooner").
     options.function_tolerance = 3e-5;
     return options;
   }();
@@ -60,8 +60,8 @@ struct IncrementalMapperOptions {
     options.loss_function = LossFunctionType::kCauchy;
     options.max_num_iterations = 10;
     // Each round stops once no camera moves by more than 3e-5 (radians, or of the centres'
-    // spread): the points' creep under Cauchy left the cameras where they were (README, "A
-    // robust finish that stops when the cameras do").
+    // spread): the points' creep under Cauchy left the cameras where they were (docs/defaults.md,
+    // "A robust finish that stops when the cameras do").
     options.camera_step_tolerance = 3e-5;
     options.refine_focal_length = true;
     options.refine_extra_params = true;
@@ -75,14 +75,14 @@ struct IncrementalMapperOptions {
   // Global BA when the model grew by this factor in images or in points: each doubling. The
   // local adjustments keep new images in place meanwhile, and the final adjustment sets the
   // errors: 1.25 and COLMAP's 1.1 give the same errors on templeRing and the 300- and
-  // 1,000-view surveys for more global adjustments (README, "Global bundle adjustment").
+  // 1,000-view surveys for more global adjustments (docs/defaults.md, "Global bundle adjustment").
   double global_ba_images_ratio = 2.0;
   double global_ba_points_ratio = 2.0;
   int global_ba_max_refinements = 3;  // BA + filter + complete rounds of the final BA.
   // The final adjustment also frees the principal point of cameras without a prior when each
   // is seen by at least this many images (0: never), and keeps it only if it stays near the
   // image centre: a centred guess that is off is otherwise absorbed by focal length and
-  // distortion (README, "Principal point freed at the end").
+  // distortion (docs/defaults.md, "Principal point freed at the end").
   int final_principal_point_min_images = 10;
   // Models.
   int min_model_size = 3;       // Smaller models are discarded.

@@ -14,7 +14,7 @@ struct TrackTriangulationOptions {
   // puts good observations a few pixels off, and the filter removes the bad ones later. 8 px
   // against 4, with the native SIFT: mean track length on templeRing 6.26 against 6.10 and
   // fountain-P11 4.84 against 4.76; median centre error 0.71 against 0.64 mm and 2.06 against
-  // 2.09 mm (README, "Tracks seed points").
+  // 2.09 mm (docs/defaults.md, "Tracks seed points").
   double max_reprojection_error_px = 8.0;
   int max_pair_trials = 30;  // View pairs tried as hypotheses for long tracks.
   // Features that only two images saw get no point (COLMAP's tri_ignore_two_view_tracks):
@@ -22,8 +22,8 @@ struct TrackTriangulationOptions {
   bool ignore_two_view_tracks = true;
   // Completion, merging and re-triangulation (COLMAP's, with its values 5, on, 0.2) are off
   // by default: on templeRing, fountain-P11 and a 300-view aerial survey they made tracks
-  // longer but no pose more accurate, and mapping the survey 65 % slower (README,
-  // "Completion and merging are off").
+  // longer but no pose more accurate, and mapping the survey 65 % slower (docs/defaults.md,
+  // "Tracks seed points").
   // Correspondence hops a point grows along when completed (0: no completion).
   int complete_max_transitivity = 0;
   // Points that correspondences link merge when one point fits all their observations.

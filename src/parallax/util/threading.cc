@@ -65,7 +65,7 @@ class WorkerPool {
   // of those loops (and more in a virtual machine), so a thread that has just finished
   // polls before it sleeps. Long enough to span the serial work between the loops of a
   // local adjustment (solve, step, norms): at 50 us templeRing's local adjustments took
-  // 0.262 s, at 1 ms 0.210 s (README, "Threads that wait a millisecond"). Other callers
+  // 0.262 s, at 1 ms 0.210 s (docs/defaults.md, "Threads that wait a millisecond"). Other callers
   // hand the pool one loop per stage or per batch, so the spin after them is lost once.
   template <typename Busy>
   static void SpinWhile(const Busy& busy) {
