@@ -6,8 +6,8 @@ namespace parallax {
 
 // The dynamic-size dense decompositions of the small solvers (epipolar, homography and
 // resection systems, EPnP) and of the report, compiled once here. Each Eigen decomposition a
-// file instantiates costs that file 10 to 25 s of compile for its blocked Householder and
-// matrix-product kernels; five solvers each had their own copy.
+// file instantiates adds its blocked Householder and matrix-product kernels to that file's
+// compile time (docs/building.md, "Compile time"); five solvers each had their own copy.
 
 // Singular values of A in descending order and its full right singular basis V (columns),
 // from a two-sided Jacobi SVD. Any shape of A; V is cols x cols, so with fewer rows than

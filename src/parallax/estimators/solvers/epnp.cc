@@ -110,8 +110,8 @@ bool SolveWithControlPoints(const std::vector<Vector2d>& points2D,
 
   // The small systems here go through dynamic-size decompositions (dense_decompositions.h) on
   // purpose: a fixed-size QR per shape and an eigensolver per control-point count made this
-  // file take two minutes to compile, for no measurable gain in a solver that runs once per
-  // LO-RANSAC refinement.
+  // file slow to compile, for no measurable gain in a solver that runs once per LO-RANSAC
+  // refinement (docs/building.md, "Compile time").
   Eigen::VectorXd eigenvalues;
   Eigen::MatrixXd eigenvectors;
   if (!SymmetricEigenSystem(MtM, &eigenvalues, &eigenvectors)) return false;

@@ -79,7 +79,7 @@ bool NullSpaceByElimination(const Eigen::Matrix<double, kRows, kCols>& A,
 
 // A^T A of an N x 9 system (column-major, so each entry is one contiguous dot product): as fast
 // as a matrix product at the solvers' sizes without instantiating Eigen's blocked product
-// kernels, which cost a file 10 s of compile.
+// kernels, which are slow to compile (docs/building.md, "Compile time").
 inline Eigen::Matrix<double, 9, 9> NormalMatrix(const Eigen::Matrix<double, Eigen::Dynamic, 9>& A) {
   Eigen::Matrix<double, 9, 9> normal;
   for (int j = 0; j < 9; ++j) {
