@@ -53,8 +53,8 @@ void PrintUsage() {
 // Keeps freed buffers of up to tens of megabytes in the process. Every bundle adjustment
 // allocates its Jacobians and reduced system afresh (7 MB on templeRing's 44,000
 // observations) and frees them; glibc's default gives that memory back to the kernel, and
-// the next adjustment faults it in again page by page. `parallax mapper` on templeRing:
-// 29,000 page faults and 1.91 s with the default, 1.64 s with this (peak memory 50 -> 55 MB).
+// the next adjustment faults it in again page by page (docs/performance.md,
+// "Freed bundle-adjustment buffers kept in the process").
 void KeepFreedLargeBuffers() {
 #if defined(__GLIBC__)
   mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's own upper bound for its adaptive threshold.

@@ -590,8 +590,8 @@ Eigen::Vector2d SchurSolver<ReducedMatrix>::CameraStepImage(
 // Ceres' model cost change of the linearised, loss-corrected residuals: -(J d)^T (r + J d / 2).
 // By the linearisation's chunks, each on a thread as there: a serial pass would pull every
 // chunk's Jacobians into one core's cache, from which the other core must fetch its own back
-// when it next writes them (on this machine that made the linearisation 60 % slower on two
-// threads than on one).
+// when it next writes them, which made the linearisation slower on two threads than on one
+// (docs/performance.md, "Schur LM: the model cost change by chunks").
 template <typename ReducedMatrix>
 double SchurSolver<ReducedMatrix>::ModelCostChange(
     const Eigen::VectorXd& camera_step, const std::vector<Eigen::Vector3d>& point_step) const {

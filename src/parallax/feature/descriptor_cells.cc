@@ -18,7 +18,8 @@ constexpr int kRowChunk = 256;
 
 // The `count` largest of values[0, n) by index, largest first, ties to the lower index: an
 // insertion into the kept list, which for 1 to 4 of 32 cells is a few compares per value
-// where a partial sort of the indices took a tenth of training.
+// where a partial sort of the indices was a visible share of training (docs/performance.md,
+// "Matching cells: the largest indices by insertion").
 void TopIndices(const float* values, int n, int count, uint16_t* out) {
   int kept = 0;
   for (int i = 0; i < n; ++i) {

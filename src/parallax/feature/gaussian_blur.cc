@@ -14,16 +14,16 @@ namespace {
 
 // The vertical pass makes this many output rows at once, loading each input row once for all
 // of them: one row at a time, its symmetric sums loaded two rows per tap, and the loads bound
-// it (1.4-1.5 times as long on 1280 x 960 at sigma 3.09). Four rows of two vectors are eight
-// accumulators, enough to hide the FMA's latency, in AVX2's sixteen registers.
+// it (docs/performance.md, "Blur: four output rows per vertical step"). Four rows of two vectors
+// are eight accumulators, enough to hide the FMA's latency, in AVX2's sixteen registers.
 constexpr int kRowsPerStep = 4;
 constexpr int kVerticalBlock = 16;
 
 // A vertical step's `rows` are its taps + kRowsPerStep - 1 input rows, then the kRowsPerStep
 // rows the next step adds: each block asks for those rows' same columns, a step ahead. The
 // input comes from memory (a layer of the first octave is 4.9 MB), and with a stream per input
-// row the hardware prefetcher kept up with too few of them (templeRing, one thread: the
-// AVX-512 step's perf samples 826 -> 564, four alternating runs each).
+// row the hardware prefetcher kept up with too few of them (docs/performance.md,
+// "Blur: the next vertical step's rows prefetched").
 inline void PrefetchNextStep(const float* const* rows, int taps, int x, int floats) {
   const float* const* next = rows + taps + kRowsPerStep - 1;
   for (int q = 0; q < kRowsPerStep; ++q) {
@@ -197,8 +197,8 @@ __attribute__((target("avx512f"), always_inline)) inline void AddShiftedTap(
 // The horizontal pass of a block with the radius a constant: its 4 vectors of columns and
 // one on either side are loaded once, and each tap's columns are shifted out of them
 // (valignd); loaded at each tap's offset, 15 loads in 16 split a cache line, and those loads
-// bound the pass (templeRing, one thread: its perf samples 743-808 -> 441-503, three
-// alternating runs each). Summed as HorizontalRow sums.
+// bound the pass (docs/performance.md, "Blur: columns shifted out of registers"). Summed as
+// HorizontalRow sums.
 template <int kRadius>
 __attribute__((target("avx512f"), flatten)) int HorizontalRowAvx512(const float* row,
                                                                     const Float8* taps, int width,

@@ -10,8 +10,8 @@ namespace parallax {
 
 // The widest vectors the blur may use. A wider vector's lanes run the same operations in the
 // same order, so either gives the same floats: kWidest takes AVX-512 where the x86-64 CPU has
-// it (2.4 % less CPU time for templeRing's extraction on an AVX-512 Zen 5; the passes are
-// mostly bound by their loads), kBuild the build's vectors alone (tests compare the two).
+// it (a little less CPU time, the passes being mostly bound by their loads: docs/portable-build.md,
+// "What the default build targets"), kBuild the build's vectors alone (tests compare the two).
 enum class BlurVectors { kBuild, kWidest };
 
 // True when kWidest blurs with AVX-512 here.
@@ -26,11 +26,11 @@ std::vector<float> GaussianHalfKernel(double sigma);
 // cv::GaussianBlur(src, dst, Size(), sigma, sigma, BORDER_REPLICATE) does with the same kernel,
 // up to float rounding; a view of a larger image is blurred as an image of its own. SIFT's scale
 // space is mostly this blur; OpenCV's filter engine copies every row into a bordered buffer and
-// sums the horizontal pass without the kernel's symmetry, and took 1.6 times as long. Four
-// output rows at a time: their vertical pass into padded rows that stay in L1, then the
-// horizontal pass from each. `dst` must not share data with `src`. `row_done`, when given, is
-// called with each row of `dst` once it is written, in order, while the row is still in cache (and
-// the same row of `src`, which the vertical pass has just read).
+// sums the horizontal pass without the kernel's symmetry, and was slower (docs/defaults.md,
+// "Parallax's own SIFT"). Four output rows at a time: their vertical pass into padded rows that
+// stay in L1, then the horizontal pass from each. `dst` must not share data with `src`. `row_done`,
+// when given, is called with each row of `dst` once it is written, in order, while the row is still
+// in cache (and the same row of `src`, which the vertical pass has just read).
 void GaussianBlur(const cv::Mat& src, double sigma, cv::Mat* dst,
                   const std::function<void(int row)>& row_done = nullptr,
                   BlurVectors vectors = BlurVectors::kWidest);

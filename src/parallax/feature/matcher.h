@@ -29,7 +29,7 @@ struct MatchableDescriptors {
 MatchableDescriptors PrepareDescriptors(FeatureDescriptors descriptors);
 
 // Packs the rows for this CPU's similarity kernel, for descriptors that are image 1 of many
-// pairs (exhaustive matching packed each image once per pair: 6 % of its time on templeRing).
+// pairs: packed once, not once per pair (docs/performance.md, "Descriptors packed once per image").
 void PackRows(MatchableDescriptors* descriptors);
 
 // `rows` of `descriptors`, in that order, with their scales and sums (what PrepareDescriptors

@@ -50,9 +50,8 @@ constexpr int kDescriptorHistogramSize = kPaddedGrid * kPaddedGrid * kDescriptor
 // Copies of the histogram that successive samples of a row take turns adding to (sample i to
 // copy i % kDescriptorCopies): a row's samples stay in one cell for five to ten steps, and
 // each add waits for the last add to its copy's cell to land (a store forwarded to a load,
-// then a multiply-add). Four rather than two: templeRing's single-thread extraction CPU
-// 1.51 -> 1.47 s; eight rather than four, once the adds ran in one loop over many rows
-// (AddDescriptorSamples): the descriptors' share of extraction's perf samples 25.2 -> 24.1 %.
+// then a multiply-add). Four beat two, and eight beat four once the adds ran in one loop over
+// many rows (AddDescriptorSamples; docs/performance.md, "Descriptor: histogram copies").
 constexpr int kDescriptorCopies = 8;
 static_assert((kDescriptorCopies & (kDescriptorCopies - 1)) == 0, "a power of two");
 // A descriptor's samples are computed a Float8 at a time (DescriptorSamples), and sample
@@ -249,8 +248,8 @@ class LayerGradient {
         const float* below = image_.ptr<float>(r + 1);
         // The layer was written before every octave's extrema were found, so its rows come
         // from memory, and each row's segment is too short for the hardware prefetcher to
-        // get going: the next row's is asked for now (templeRing: ComputeNativeSift's own
-        // time, where this loop is inlined, 10 to 28 % less).
+        // get going: the next row's is asked for now (docs/performance.md,
+        // "Gradients: the row after next prefetched").
         if (r + 2 < image_.rows) {
           const float* next = image_.ptr<float>(r + 2);
           for (int c = col_begin; c < col_end; c += 16) __builtin_prefetch(next + c);
@@ -577,9 +576,9 @@ void ScreenRow(const float* __restrict row, const float* __restrict largest_abov
 // Screens differences 1 to S of an octave while BuildOctave blurs it: row r - 1 of difference
 // k - 1 as soon as row r of layer k is written, while that row and the same row of layer k - 1
 // (which the blur has just read) are in cache. Screened after the octave was built, the two
-// rows of every difference came back from memory: templeRing's octaves and screen took
-// 0.97-1.02 s on one thread that way, 0.73-0.82 s this way. The test across scales also reads
-// difference k, not yet made, so it waits for the whole octave.
+// rows of every difference came back from memory, which was slower (docs/defaults.md,
+// "Parallax's own SIFT"). The test across scales also reads difference k, not yet made, so it waits
+// for the whole octave.
 class DogScreen {
  public:
   DogScreen(const std::vector<cv::Mat>& gaussians, int num_octave_layers, float screen,
@@ -707,7 +706,7 @@ bool RefineExtremum(const Differences& dogs, const NativeSiftOptions& options,
 // Gaussian window is the product of two of these. Three exponentials instead of 2 radius + 1:
 // neighbouring weights differ by the factor exp(-(2 d + 1) / (2 sigma^2)), which itself
 // changes by exp(-1 / sigma^2) from one to the next; in double, so that the products lose
-// nothing a float keeps (the expf per weight were 1.5 % of extraction).
+// nothing a float keeps (docs/performance.md, "Gaussian window weights from three exponentials").
 const float* GaussianWeights(int radius, float fraction, float sigma, std::vector<float>* weights) {
   // Zeros after the last weight, for the last block of a row in DescriptorSamples and
   // OrientationSamples.

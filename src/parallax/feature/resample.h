@@ -8,9 +8,9 @@ namespace parallax {
 // centres, the same floats as cv::resize(src, dst, 2 x size, 0, 0, INTER_LINEAR): output
 // pixel X lies at input coordinate (X + 0.5) / 2 - 0.5, so it weighs the two inputs around it
 // by 3/4 and 1/4; the edge columns repeat the input's, and the edge rows weigh one input row
-// twice, as OpenCV does. The native SIFT's doubled first octave starts here: cv::resize took
-// 0.4-0.6 ms of a templeRing photo's 30, this a fifth of that. `dst` must not share `src`'s
-// data.
+// twice, as OpenCV does. The native SIFT's doubled first octave starts here, faster than
+// cv::resize (docs/performance.md, "Upsampling for the doubled first octave"). `dst` must not
+// share `src`'s data.
 void UpsampleTwice(const cv::Mat& src, cv::Mat* dst);
 
 // Every other pixel of every other row of a CV_32F image, from (0, 0): each octave after the

@@ -14,9 +14,9 @@ namespace {
 
 // COLMAP's quantisation: a unit-L2 float descriptor times 512, rounded and clamped to 255
 // (SIFT components rarely exceed 0.5 after Lowe's 0.2 clamp and renormalisation). Components
-// are never negative, so rounding half away from zero (std::round, a call per component, 1 %
-// of extraction) is the floor plus one where the exact remainder reaches one half, which the
-// compiler vectorises.
+// are never negative, so rounding half away from zero (std::round, a call per component:
+// docs/performance.md, "Descriptor quantisation") is the floor plus one where the exact
+// remainder reaches one half, which the compiler vectorises.
 void QuantiseUnitDescriptor(const float* __restrict unit, uint8_t* __restrict out) {
   for (int k = 0; k < 128; ++k) {
     const float scaled = 512.0f * unit[k];

@@ -30,7 +30,8 @@ struct DecompressorDeleter {
 // What decoding needs besides the image, one per thread and reused from image to image: the
 // decompressor (32 KB of tables), the image data of several IDAT chunks joined, and the
 // inflated rows. A megabyte allocated afresh for each templeRing photo came back from the
-// kernel page by page, and the faults took three times as long as the decoding.
+// kernel page by page, and the faults outlasted the decoding (docs/performance.md,
+// "PNG: decoding buffers reused per thread").
 struct DecodingBuffers {
   std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> decompressor{
       libdeflate_alloc_decompressor()};
@@ -62,8 +63,8 @@ uint8_t Paeth(int left, int above, int upper_left) {
 
 // Undoes the Sub filter (each byte adds the one bpp before it) with the running sums in
 // registers, one per byte of a pixel: through memory, each byte waited for the store of the byte
-// bpp before it, which was three quarters of decoding a templeRing photo (all its rows are
-// Sub).
+// bpp before it, which was most of decoding a templeRing photo, all of whose rows are Sub
+// (docs/performance.md, "PNG: the Sub filter undone in registers").
 template <int kBpp>
 void UndoSub(const uint8_t* in, size_t length, uint8_t* out) {
   static_assert(kBpp == 1 || kBpp == 3 || kBpp == 4);

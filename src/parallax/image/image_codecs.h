@@ -10,7 +10,8 @@ namespace parallax {
 
 // Image decoding and encoding on libjpeg(-turbo), libpng and libtiff directly, instead of
 // OpenCV's imgcodecs: Debian's imgcodecs links GDAL, GDCM, OpenEXR and about 120 more
-// libraries, which took the process from 11 MB to 52 MB resident before it read a pixel.
+// libraries, which multiplied the process's resident memory before it read a pixel
+// (docs/dependencies.md).
 
 // Decodes a whole file of `format` into the layout cv::imdecode(IMREAD_UNCHANGED) gives:
 // 8 or 16 bits per sample, 1, 3 or 4 channels, colour in BGR(A) order. Throws

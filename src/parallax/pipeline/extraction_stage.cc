@@ -293,7 +293,8 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
 
   // Images are extracted in parallel, so OpenCV's own threads inside SIFT only compete with
   // ours, and its pool busy-waits after each call, which slowed the mapping stage that
-  // follows by ~10 % on templeRing. One OpenCV thread while there is an image per worker.
+  // follows (docs/performance.md, "One OpenCV thread while every worker has an image"). One OpenCV
+  // thread while there is an image per worker.
   const std::optional<FeatureShardIndex> shards =
       options.feature_shards.empty()
           ? std::nullopt
@@ -305,7 +306,7 @@ ExtractionStageResult RunExtractionStage(const ExtractionStageOptions& options,
     const std::unique_ptr<FeatureExtractor> extractor = CreateSiftExtractor(options.sift);
     // Results are written in job order (deterministic image ids), one transaction per image,
     // by a thread of their own: SQLite's checkpoints fsync, and a worker that wrote would
-    // wait for them (templeRing: 17 fsyncs, about 60 ms).
+    // wait for them (docs/performance.md, "Extraction results written by a thread of their own").
     InOrderConsumer<ExtractionResult> writer(jobs.size(),
                                              [&](size_t index, const ExtractionResult& result) {
                                                write_result(index, result);

@@ -127,7 +127,8 @@ void WriteModels(const std::vector<Reconstruction>& models, const std::filesyste
       const fs::path dir = staging / std::to_string(index);
       CreateDirectoryOrThrow(dir);
       // The two formats side by side: formatting the text files took longer than the rest of
-      // the writing and colouring together (templeRing: 25-30 ms of 40-60).
+      // the writing and colouring together (docs/performance.md,
+      // "Models written in both formats side by side").
       ParallelFor(0, 2, /*num_threads=*/-1, [&](size_t format) {
         if (format == 0 && write_binary) WriteReconstructionBinary(models[index], dir);
         if (format == 1 && write_text) WriteReconstructionText(models[index], dir);

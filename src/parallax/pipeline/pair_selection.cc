@@ -234,7 +234,7 @@ std::vector<ImagePair> RetrievalPairs(const RetrievalIndex& index,
                                       int num_threads) {
   PARALLAX_CHECK_GT(num_neighbors, 0);
   // Each query reads posting lists that grow with the collection, so the queries together grow
-  // with its square (about 45 s of one thread at 5,000 views): one image per task, its
+  // with its square (docs/pair-selection.md, "Retrieval"): one image per task, its
   // neighbours kept apart and joined in image order.
   std::vector<std::vector<image_t>> neighbors(image_ids.size());
   ParallelFor(0, image_ids.size(), num_threads, [&](size_t i) {

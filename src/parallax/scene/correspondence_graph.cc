@@ -63,7 +63,8 @@ void CorrespondenceGraph::Finalize() {
   UnionFind sets(num_nodes);
   // Sorted image ids of every set with more than one element, keyed by root. Read in place
   // (a single node's set is its image): copying both lists for every match made this loop
-  // 5 of the 11 s that loading 1,000 aerial views for the mapper took.
+  // much of the time of loading a large collection for the mapper (docs/performance.md,
+  // "Correspondence graph: set lists read in place").
   std::unordered_map<size_t, std::vector<image_t>> set_images;
   const auto images_of = [&](size_t root, image_t* single) -> std::span<const image_t> {
     const auto it = set_images.find(root);

@@ -299,7 +299,7 @@ class IncrementalMapper::ModelBuilder {
   std::vector<image_t> RankCandidates(const std::map<image_t, int>& trials) {
     // Each image's registered neighbours are counted as registrations come and go: walking
     // every registered image's neighbours before each registration grew as the square of the
-    // number of images (26 s of 596 s mapping 2,000 aerial views).
+    // number of images (docs/mapper-scaling.md, "Figures").
     const std::map<image_t, Image>& images = reconstruction_.Images();
     const size_t id_end = images.empty() ? 0 : images.rbegin()->first + 1;
     registered_neighbors_.resize(id_end, 0);
@@ -447,10 +447,8 @@ class IncrementalMapper::ModelBuilder {
   // Photos added to a finished model, fewer than its images. They are settled by local
   // adjustments, then one round of the final global one: each local window holds the seed
   // images that see the new one best, and the seed was adjusted, filtered and completed as a
-  // whole in its own run. On templeRing (10 photos added to 37), the two intermediate global
-  // adjustments and two extra final rounds that the usual schedule adds took 0.6 s of 1.4 s
-  // and gained nothing: without them the median centre error is 5 % lower and the rotation
-  // error 1 % higher (bench/add_photos.sh).
+  // whole in its own run. The intermediate global adjustments and extra final rounds that the
+  // usual schedule adds took time and gained nothing (docs/adding-photos.md, bench/add_photos.sh).
   bool ExtendingSeed() const { return reconstruction_.NumRegImages() < 2 * num_seed_images_; }
 
   // A local adjustment around the new image, or a global one once the model has grown by the
@@ -482,8 +480,8 @@ class IncrementalMapper::ModelBuilder {
   // damping keeps the system definite along it, and the gradient has no component there, so
   // it does not drift. Holding one translation coordinate of the second image (COLMAP's way)
   // gives that block a 2-d tangent space, which sends Ceres' Schur elimination from its
-  // fixed-size <2,3,3> kernels to the dynamic ones: 20 % slower per iteration on templeRing
-  // for the same model to four digits.
+  // fixed-size <2,3,3> kernels to the slower dynamic ones, for the same model to four digits
+  // (docs/performance.md, "Gauge: the first image's pose alone held").
   void FixGauge(BundleAdjustmentConfig* config) const { config->SetConstantPose(init_image_id1_); }
 
   void LocalBundleAdjust(image_t image_id) {

@@ -16,8 +16,8 @@ double VisibilityScore(image_t image_id, const TrackedReconstruction& model);
 
 // VisibilityScore of every image of the model, kept as counts per grid cell that follow the
 // tracks as they gain and lose points. Scoring every connected image before each
-// registration instead grew as the square of the number of images: 105 s of the 773 s that
-// mapping 2,000 aerial views took.
+// registration instead grew as the square of the number of images (docs/mapper-scaling.md,
+// "Figures").
 class VisibilityScores {
  public:
   explicit VisibilityScores(TrackedReconstruction* model);

@@ -22,7 +22,7 @@ struct TrackTriangulationOptions {
   bool ignore_two_view_tracks = true;
   // Completion, merging and re-triangulation (COLMAP's, with its values 5, on, 0.2) are off
   // by default: on templeRing, fountain-P11 and a 300-view aerial survey they made tracks
-  // longer but no pose more accurate, and mapping the survey 65 % slower (docs/defaults.md,
+  // longer but no pose more accurate, and mapping the survey slower (docs/defaults.md,
   // "Tracks seed points").
   // Correspondence hops a point grows along when completed (0: no completion).
   int complete_max_transitivity = 0;

@@ -8,8 +8,8 @@ namespace parallax {
 // spaces of a few tens of megabytes): aligned to 2 MiB and, on Linux, advised to be backed
 // by transparent huge pages where the kernel allows them only on request (the "madvise"
 // setting, Debian's default). With 4 KiB pages, first touching such buffers cost each
-// extraction thread about 20,000 page faults, and the vertical blur's taps, one image row
-// apart, a TLB entry each.
+// extraction thread a page fault per 4 KiB (docs/performance.md, "Scale space in huge pages"), and
+// the vertical blur's taps, one image row apart, a TLB entry each.
 class HugePageBuffer {
  public:
   HugePageBuffer() = default;

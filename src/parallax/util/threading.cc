@@ -64,9 +64,9 @@ class WorkerPool {
   // work between them: waking a sleeping thread through the kernel took longer than many
   // of those loops (and more in a virtual machine), so a thread that has just finished
   // polls before it sleeps. Long enough to span the serial work between the loops of a
-  // local adjustment (solve, step, norms): at 50 us templeRing's local adjustments took
-  // 0.262 s, at 1 ms 0.210 s (docs/defaults.md, "Threads that wait a millisecond"). Other callers
-  // hand the pool one loop per stage or per batch, so the spin after them is lost once.
+  // local adjustment (solve, step, norms), which 50 us did not (docs/defaults.md,
+  // "Threads that wait a millisecond"). Other callers hand the pool one loop per stage or per
+  // batch, so the spin after them is lost once.
   template <typename Busy>
   static void SpinWhile(const Busy& busy) {
     constexpr auto kSpin = std::chrono::microseconds(kSpinMicroseconds);
