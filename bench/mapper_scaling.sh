@@ -7,8 +7,9 @@
 # `parallax features`, `parallax match --pairs auto`, each timed. Then on that database:
 #   1. parallax mapper (defaults), timed, evaluated against the exact cameras;
 #   2. COLMAP 3.8 `colmap mapper` and, when ../shared/tools/colmap4 is set up, COLMAP 4.2's, on
-#      copies of the same database, for sizes up to PARALLAX_COLMAP_MAX_VIEWS (default 300: at
-#      1,000 views COLMAP 3.8 took 76 minutes on 2 cores). PARALLAX_SKIP_COLMAP=1 leaves them out,
+#      copies of the same database, for sizes up to PARALLAX_COLMAP_MAX_VIEWS (default 300:
+#      COLMAP 3.8's mapping time grows far faster with the views; docs/mapper-scaling.md has its
+#      1,000-view run). PARALLAX_SKIP_COLMAP=1 leaves them out,
 #      PARALLAX_COLMAP_VERSIONS="3.8" runs only those named, and PARALLAX_COLMAP_TIMEOUT=SECONDS
 #      stops a COLMAP mapper that runs longer (its row then says it did not finish).
 # End to end is features + matching + Parallax's mapper. Errors are after a similarity
