@@ -6,6 +6,7 @@
 #   - a file in src/parallax/<layer>/ includes "parallax/<other>/..." where <other> cannot be
 #     reached from <layer> along the graph (from the tests line too, for a test's file);
 #   - the graph has a cycle, names a layer with no folder, or misses a folder of src/parallax/.
+#   - docs/architecture.md's Layers table gives a layer other links than the graph does.
 #   bash scripts/check-layers.sh [--root DIR]   checks the tree at DIR (default: this checkout)
 #   bash scripts/check-layers.sh --self-test    a clean tree in /tmp passes, and one broken tree
 #                                               per kind of violation fails, naming it
@@ -19,6 +20,7 @@ import sys
 import tempfile
 
 GRAPH = "docs/layers.txt"
+DOC = "docs/architecture.md"
 LAYERS = "src/parallax"
 SOURCE_EXTENSIONS = (".h", ".hh", ".hpp", ".cc", ".cpp", ".cxx", ".inl", ".ipp")
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"](parallax/([^/">]+)/[^">]*)[">]')
@@ -99,6 +101,37 @@ def check_graph(root, deps, test_deps, lines, errors):
     for layer in deps:
         if layer not in state:
             visit(layer)
+
+
+def check_doc(root, deps, errors):
+    """The Layers table of docs/architecture.md: a row per layer, its links the graph's edges."""
+    path = os.path.join(root, DOC)
+    if not os.path.isfile(path):
+        return
+    rows, in_layers = {}, False
+    with open(path, encoding="utf-8") as doc:
+        for number, line in enumerate(doc, 1):
+            if line.startswith("## "):
+                in_layers = line.strip() == "## Layers"
+                continue
+            match = re.match(r"\|\s*`([^`]+)`\s*\|", line)
+            if not in_layers or not match:
+                continue
+            layer = match.group(1)
+            links = [item.strip() for item in line.rstrip().rstrip("|").split("|")[-1].split(",")]
+            rows[layer] = number
+            if layer not in deps:
+                errors.append(f"{DOC}:{number}: the Layers table has a row for '{layer}', "
+                              f"a layer {GRAPH} does not list")
+                continue
+            named = [item for item in links if item in deps]
+            if sorted(named) != sorted(deps[layer]):
+                errors.append(f"{DOC}:{number}: the Layers table gives {layer} the links "
+                              f"'{', '.join(named) or 'none'}', {GRAPH} the edges "
+                              f"'{', '.join(deps[layer]) or 'none'}'")
+    for layer in deps:
+        if layer not in rows:
+            errors.append(f"{DOC}: the Layers table has no row for '{layer}'")
 
 
 def reachable(deps, start):
@@ -367,6 +400,7 @@ def check(root):
     if not deps:
         return errors, "no graph"
     check_graph(root, deps, test_deps, lines, errors)
+    check_doc(root, deps, errors)
     targets, test_sources = [], set()
     for layer in sorted(deps):
         if os.path.isdir(os.path.join(root, LAYERS, layer)):
@@ -386,13 +420,16 @@ def run_check(root):
     if errors:
         print(f"check-layers: {len(errors)} violations of {GRAPH}", file=sys.stderr)
         return 1
-    print(f"check-layers: {summary} agree with {GRAPH}")
+    print(f"check-layers: {summary} and {DOC}'s Layers table agree with {GRAPH}")
     return 0
 
 
 # A clean tree: util <- mid <- top, util <- side, and top's tests link side.
 CLEAN = {
     GRAPH: "# test graph\nutil:\nmid: util\nside: util\ntop: mid\ntop tests: side\n",
+    DOC: "# Architecture\n\n## Layers\n\n| folder | owns | links |\n|---|---|---|\n"
+         "| `util` | checks | threads |\n| `mid` | middle | util |\n| `side` | aside | util, SQLite |\n"
+         "| `top` | the top | mid |\n\n## Stages\n\n| `stage` | x | anything |\n",
     f"{LAYERS}/CMakeLists.txt": "add_subdirectory(util)\n",
     f"{LAYERS}/util/CMakeLists.txt":
         "parallax_add_library(NAME util EXCLUDE \"test_main\\\\.cc$\" DEPS Threads::Threads)\n"
@@ -461,6 +498,12 @@ BROKEN = [
     ("a layer folder the graph does not list",
      {f"{LAYERS}/extra/CMakeLists.txt": "parallax_add_library(NAME extra DEPS parallax_util)\n"},
      f"{LAYERS}/extra/: a layer folder that {GRAPH} does not list"),
+    ("architecture.md's table giving other links",
+     {DOC: CLEAN[DOC].replace("| `top` | the top | mid |", "| `top` | the top | mid, side |")},
+     f"{DOC}:10: the Layers table gives top the links 'mid, side', {GRAPH} the edges 'mid'"),
+    ("architecture.md's table missing a layer",
+     {DOC: CLEAN[DOC].replace("| `side` | aside | util, SQLite |\n", "")},
+     f"{DOC}: the Layers table has no row for 'side'"),
     ("an edge no target links",
      {GRAPH: CLEAN[GRAPH].replace("top: mid\n", "top: mid side\n")},
      "edge top -> side that no target"),
