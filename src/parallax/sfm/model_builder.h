@@ -1,0 +1,132 @@
+#pragma once
+
+#include <map>
+#include <set>
+#include <vector>
+
+#include "parallax/estimators/bundle_adjustment.h"
+#include "parallax/scene/reconstruction.h"
+#include "parallax/sfm/incremental_mapper_options.h"
+#include "parallax/sfm/mapper_input.h"
+#include "parallax/sfm/mapper_summary.h"
+#include "parallax/sfm/next_view.h"
+#include "parallax/sfm/tracked_reconstruction.h"
+#include "parallax/util/progress.h"
+
+namespace parallax {
+
+// The steps of building one model, each callable on its own (COLMAP's IncrementalMapper
+// exposes the same steps; IncrementalMapper::Reconstruct is the loop that orders them). The
+// model starts with the input's cameras and images, none registered; images that `used_images`
+// holds (registered by earlier models) are never used. Every step adds its time to the
+// summary's phases and its outcome to the summary's image reports.
+//
+//   initialise     InitializeFromBestPair, InitializeFromPair, InitializeFromModel
+//   register next  NextImages, RegisterImage (PnP, refinement, then TriangulateImage)
+//   triangulate    TriangulateImage, RetriangulatePairs
+//   adjust         AdjustAfterRegistration, AdjustLocalBundle, AdjustGlobalBundle
+//   filter         FilterObservations
+//   complete       CompleteTracks (tracks completed, points merged)
+//
+// Steps that need registered images (all but initialisation and NextImages) expect a model
+// that was initialised.
+class ModelBuilder {
+ public:
+  ModelBuilder(const IncrementalMapperOptions& options, const MapperInput& input,
+               const std::set<image_t>& used_images, MapperSummary* summary,
+               ProgressReporter* progress);
+
+  Reconstruction& Model() { return reconstruction_; }
+  const Reconstruction& Model() const { return reconstruction_; }
+  // The model with its tracks: which point each track seeded.
+  const TrackedReconstruction& Tracked() const { return model_; }
+
+  // ----- Initialisation ---------------------------------------------------------------------
+  // Tries the verified pairs with at least init_min_num_inliers inliers, most inliers first,
+  // at the full triangulation-angle threshold, then at half and a quarter of it. False when
+  // no pair qualifies.
+  bool InitializeFromBestPair();
+  // Registers the two images of `pair_id` with the pair's relative pose (from E when the
+  // database stored none), triangulates their matches and adjusts both. False (nothing
+  // registered) when fewer than init_min_num_inliers matches triangulate, their median angle
+  // is below `min_angle_deg`, or too few points survive the adjustment.
+  bool InitializeFromPair(image_pair_t pair_id, const TwoViewGeometry& geometry,
+                          double min_angle_deg);
+  // Starts from the registered images of `seed` that this input holds and no earlier model
+  // used, with the seed's poses and intrinsics; every track they see is triangulated anew.
+  // False (and nothing registered) when fewer than two qualify.
+  bool InitializeFromModel(const Reconstruction& seed);
+
+  // ----- Registration -----------------------------------------------------------------------
+  // Unregistered images connected to the model, best first by visibility score, leaving out
+  // those that `trials` says failed max_registration_trials times.
+  std::vector<image_t> NextImages(const std::map<image_t, int>& trials);
+  // PnP RANSAC on the image's 2D-3D correspondences, pose refinement, observations of the
+  // inliers, then TriangulateImage. False, with `report->reason`, when any bar is not met.
+  bool RegisterImage(image_t image_id, MapperImageReport* report);
+  // Unregistered images left that no earlier model used.
+  bool ImagesLeftToRegister() const;
+
+  // ----- Triangulation ----------------------------------------------------------------------
+  // New points from the image's tracks, and the image's keypoints added to points they fit.
+  void TriangulateImage(image_t image_id);
+  // Image pairs left under-reconstructed, triangulated again with relaxed thresholds.
+  // Returns the observations added.
+  size_t RetriangulatePairs();
+
+  // ----- Bundle adjustment ------------------------------------------------------------------
+  // A local adjustment around the new image, or a global one once the model has grown by
+  // global_ba_images_ratio or global_ba_points_ratio since the last.
+  void AdjustAfterRegistration(image_t image_id);
+  // The image and the local_ba_num_images - 1 images sharing most points with it, cameras
+  // fixed; then the points they see filtered and completed.
+  void AdjustLocalBundle(image_t image_id);
+  // Every registered image, after RetriangulatePairs; filtered and completed after each
+  // round. `final`: the robust final adjustment, refined until the model stops changing (and
+  // the principal point freed when the cameras are seen enough).
+  void AdjustGlobalBundle(bool final = false);
+  // Images or points added since the last global adjustment.
+  bool GrewSinceGlobalAdjustment() const;
+
+  // ----- Filtering and completion -----------------------------------------------------------
+  // Observations and points that stopped fitting (ObservationFilterOptions). Returns the
+  // observations removed.
+  size_t FilterObservations();
+  // Tracks completed with the observations that now fit, and points merged. Returns the
+  // observations added or merged.
+  size_t CompleteTracks();
+
+ private:
+  bool Available(image_t image_id) const;
+  bool EstimatePoseAndRegister(image_t image_id, MapperImageReport* report);
+  size_t AddRegistrationObservations(image_t image_id,
+                                     const std::vector<std::pair<point2D_t, point3D_t>>& links,
+                                     const std::vector<char>& inlier_mask);
+  bool ExtendingSeed() const;
+  void SetCameraConstancy(BundleAdjustmentConfig* config) const;
+  void FixGauge(BundleAdjustmentConfig* config) const;
+  bool PrincipalPointsConstrained() const;
+  std::map<camera_t, std::vector<double>> CameraParams() const;
+  bool IntrinsicsPlausible() const;
+  void AdjustGlobalBundleRounds(bool final, bool refine_principal_point);
+  void RunBundleAdjustment(const BundleAdjustmentOptions& ba_options,
+                           const BundleAdjustmentConfig& config, double* phase_seconds);
+
+  const IncrementalMapperOptions& options_;
+  const MapperInput& input_;
+  const std::set<image_t>& used_images_;
+  MapperSummary* summary_;
+  ProgressReporter* progress_;
+  Reconstruction reconstruction_;
+  TrackedReconstruction model_;
+  VisibilityScores visibility_;            // Of the unregistered images, for ranking the next view.
+  std::vector<int> registered_neighbors_;  // By image id, as of the last ranking.
+  std::vector<char> counted_as_registered_;  // By image id: in its neighbours' counts.
+  image_t init_image_id1_ = kInvalidImageId;
+  image_t init_image_id2_ = kInvalidImageId;
+  size_t images_at_last_global_ba_ = 0;
+  size_t points_at_last_global_ba_ = 0;
+  size_t num_seed_images_ = 0;  // Registered from an input model (Extend).
+};
+
+}  // namespace parallax
