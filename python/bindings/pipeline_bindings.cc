@@ -90,7 +90,7 @@ MatchingStageResult Match(const fs::path& database, int threads, uint64_t seed,
   MatchingStageOptions options =
       ParseOptions<MatchingStageOptions>("match", kwargs, cli::AddMatchingOptions);
   options.num_threads = threads;
-  options.geometry.ransac.random_seed = seed;
+  options.seed = seed;
   MatchingStageResult result;
   RunReleasingGil([&] { result = MatchDatabase(options, database); }, progress);
   return result;
@@ -101,7 +101,7 @@ std::vector<Reconstruction> Map(const fs::path& database, const fs::path& image_
                                 const py::object& progress, const py::kwargs& kwargs) {
   MappingStageOptions options =
       ParseOptions<MappingStageOptions>("map", kwargs, cli::AddMapperOptions);
-  options.mapper.absolute_pose.ransac.random_seed = seed;
+  options.mapper.seed = seed;
   MappingStageResult result;
   RunReleasingGil([&] { result = MapDatabase(options, database, image_dir, output_dir); },
                   progress);

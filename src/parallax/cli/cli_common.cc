@@ -42,6 +42,13 @@ CLI::Validator DimensionsValidator(const std::string& example) {
       "AxB");
 }
 
+void AddSeedOption(CLI::App& app, uint64_t* seed) {
+  app.add_option("--seed", *seed,
+                 "Random seed (same inputs, options and seed: same result; bit for bit with "
+                 "--ba-threads 1)")
+      ->capture_default_str();
+}
+
 void AddVerbosityFlags(CLI::App& app, VerbosityFlags* flags) {
   app.add_flag("-q,--quiet", flags->quiet, "Print only warnings and errors");
   app.add_flag("-v,--verbose", flags->verbose, "Print debug messages");

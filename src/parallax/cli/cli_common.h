@@ -1,6 +1,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -17,6 +18,10 @@ struct VerbosityFlags {
   bool verbose = false;
 };
 void AddVerbosityFlags(CLI::App& app, VerbosityFlags* flags);
+
+// --seed, the same words for every command that runs a randomised stage; `seed` is the seed
+// field of that stage's options (reconstruct's is spread over its stages by SetSeed).
+void AddSeedOption(CLI::App& app, uint64_t* seed);
 
 // Parses, applies the verbosity, installs the SIGINT/SIGTERM handlers, runs `body`, and turns
 // every exception into a one-line "error: ..." on stderr with exit code 1 (never a crash or a

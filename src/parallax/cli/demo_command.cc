@@ -43,8 +43,7 @@ int RunDemo(int argc, char** argv) {
     options.write_report = true;
     options.report_title =
         "Parallax demo: synthetic temple, " + std::to_string(scene.num_views) + " views";
-    options.matching.geometry.ransac.random_seed = scene.seed;
-    options.mapping.mapper.absolute_pose.ransac.random_seed = scene.seed;
+    SetSeed(scene.seed, &options);
     const ReconstructionPipelineResult result =
         RunReconstructionPipeline(options, scene_dir, output / "reconstruction");
     if (!result.Success()) {

@@ -245,6 +245,10 @@ TEST_F(DistributedTest, ARankKilledDuringMatchingLosesNothingStored) {
     EXPECT_EQ(summary["features"]["images_extracted"], 0);
     EXPECT_EQ(summary["matching"]["pairs_skipped_already_stored"], stored.size());
     EXPECT_EQ(summary["matching"]["pairs_matched"], kNumPairs - stored.size());
+    // No --mapper: the run chose the hierarchical mapper, and says why.
+    EXPECT_EQ(summary["mapper"]["type"], "hierarchical");
+    EXPECT_NE(summary["mapper"]["type_reason"].get<std::string>().find("distributed"),
+              std::string::npos);
     ExpectSameDatabase(Reference() / "database.db", out / "database.db");
     return;
   }

@@ -12,14 +12,13 @@ int RunMapper(int argc, char** argv) {
   CLI::App app("Run the incremental mapper on an existing database (Parallax's or COLMAP's)",
                "parallax mapper");
   std::string database_path, image_path, output;
-  uint64_t seed = 0;
   MappingStageOptions options;
   app.add_option("--database", database_path, "Feature and match database")->required();
   app.add_option("--image-path", image_path, "Folder of the images (for point colours)")
       ->required();
   app.add_option("--output", output, "Output folder (sparse/<k>/, points.ply, summary.json)")
       ->required();
-  app.add_option("--seed", seed, "Random seed")->capture_default_str();
+  AddSeedOption(app, &options.mapper.seed);
   app.add_option("--cluster", options.cluster_file,
                  "Map only the images and pairs of this cluster file (as the hierarchical "
                  "mapper writes them to OUT/clusters/)");
@@ -27,7 +26,6 @@ int RunMapper(int argc, char** argv) {
   VerbosityFlags flags;
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
-    options.mapper.absolute_pose.ransac.random_seed = seed;
     if (!options.cluster_file.empty() && options.mapper_type == MapperType::kHierarchical) {
       throw InputError(
           "--cluster maps one cluster incrementally; it cannot be combined with "

@@ -73,6 +73,7 @@ int RunMatch(int argc, char** argv) {
   AddMatchingOptions(app, &options);
   app.add_option("--threads", options.num_threads, "Worker threads (-1: all cores)")
       ->capture_default_str();
+  AddSeedOption(app, &options.seed);
   app.add_flag("--stats", print_stats,
                "Print per image keypoints and per pair putative matches and inliers, then the "
                "matching summary (pairs considered, matched, stopped by the preemptive test, "

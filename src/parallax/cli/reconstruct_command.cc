@@ -25,10 +25,7 @@ int RunReconstruct(int argc, char** argv) {
                  "Database to use or resume (default OUT/database.db)");
   app.add_option("--threads", num_threads, "Worker threads for every stage (-1: all cores)")
       ->capture_default_str();
-  app.add_option("--seed", seed,
-                 "Random seed (same inputs, options and seed: same model; bit for bit with "
-                 "--ba-threads 1)")
-      ->capture_default_str();
+  AddSeedOption(app, &seed);
   app.add_flag("--report", options.write_report, "Also write OUT/report.html");
   app.add_flag("!--remap", options.extend_model_with_new_photos,
                "Map all photos from scratch even when OUT holds the model of an earlier run and "
@@ -48,10 +45,22 @@ int RunReconstruct(int argc, char** argv) {
       // The other ranks' progress is the coordinator's to tell.
       if (!group.IsCoordinator() && !flags.verbose) SetLogLevel(LogLevel::kWarning);
       // Mapping is shared out by clusters, which the incremental mapper does not have.
-      if (app.count("--mapper") == 0) options.mapping.mapper_type = MapperType::kHierarchical;
+      if (app.count("--mapper") == 0) {
+        options.mapping.mapper_type = MapperType::kHierarchical;
+        options.mapping.mapper_type_reason =
+            "a distributed run maps clusters on its ranks (--mapper incremental maps on the "
+            "first rank alone)";
+      }
       if (group.IsCoordinator()) {
         PARALLAX_LOG(Info) << "distributed run: " << group.Size() << " ranks, shards in "
-                           << (std::filesystem::path(output_dir) / "shards").string();
+                           << (std::filesystem::path(output_dir) / "shards").string() << "; "
+                           << (options.mapping.mapper_type == MapperType::kHierarchical
+                                   ? "hierarchical"
+                                   : "incremental")
+                           << " mapper"
+                           << (options.mapping.mapper_type_reason.empty()
+                                   ? std::string(" (--mapper)")
+                                   : ": " + options.mapping.mapper_type_reason);
       }
     }
     const ReconstructionPipelineResult result =

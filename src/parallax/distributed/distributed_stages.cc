@@ -262,6 +262,7 @@ MappingStageResult DistributedStages::MapClusters(const MappingStageOptions& opt
                                                   const std::filesystem::path& output_dir) {
   options.Check();
   MappingStageResult result;
+  result.mapper_type_reason = options.mapper_type_reason;
   Timer timer;
   // Every rank needs the whole input to cut its clusters from.
   const MapperInput input = LoadMapperInput(database, options.input);

@@ -168,6 +168,7 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
                                    const std::filesystem::path& output_dir) {
   options.Check();
   MappingStageResult result;
+  result.mapper_type_reason = options.mapper_type_reason;
   Timer timer;
   // Read first: a missing or malformed model stops the stage before the database is loaded.
   std::optional<Reconstruction> input_model;

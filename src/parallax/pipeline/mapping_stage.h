@@ -21,6 +21,9 @@ struct MappingStageOptions {
   MapperInputOptions input;
   IncrementalMapperOptions mapper;
   MapperType mapper_type = MapperType::kIncremental;
+  // Why mapper_type is what it is when the run chose it rather than the user (a distributed
+  // run maps by clusters); logged and written to summary.json as mapper.type_reason.
+  std::string mapper_type_reason;
   HierarchicalMapperOptions hierarchical;  // With kHierarchical.
   // When set, only the images and pairs of this cluster file are mapped (incrementally): the
   // unit of work of a partitioned run.
@@ -40,6 +43,7 @@ struct MappingStageResult {
   std::vector<Reconstruction> models;  // Largest first; empty when no model could start.
   MapperSummary summary;
   std::optional<HierarchicalMapperSummary> hierarchical;  // With MapperType::kHierarchical.
+  std::string mapper_type_reason;                         // options.mapper_type_reason.
   std::map<image_t, std::string> image_names;
   std::map<image_t, size_t> num_keypoints;
   double load_seconds = 0;

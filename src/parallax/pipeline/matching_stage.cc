@@ -207,7 +207,7 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
   // look-up of the pairs already stored.
   const Timer first_round_timer;
   if (coordinator) {
-    PairSelection selection = SelectPairs(options.pairs, image_ids, *database);
+    PairSelection selection = SelectPairs(options.pairs, image_ids, *database, options.seed);
     const std::vector<std::pair<image_t, image_t>> all_pairs = std::move(selection.pairs);
     selection.pairs.clear();
     stats.selection = selection;
@@ -351,8 +351,8 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
           // The pair's seed comes from the run's and the pair's ids: the result does not
           // depend on which thread verifies the pair, nor in what order.
           TwoViewGeometryOptions pair_options = options.geometry;
-          pair_options.ransac.random_seed = DeriveSeed(
-              options.geometry.ransac.random_seed, ImagePairToPairId(job.image_id1, job.image_id2));
+          pair_options.ransac.random_seed =
+              DeriveSeed(options.seed, ImagePairToPairId(job.image_id1, job.image_id2));
           job.geometry = EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)),
                                                  features1.points,
                                                  cameras.at(camera_of_image.at(job.image_id2)),

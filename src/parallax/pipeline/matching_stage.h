@@ -58,6 +58,9 @@ struct MatchingStageOptions {
   PreemptiveMatchingOptions preemptive;
   ApproximateMatchingOptions approximate;
   int num_threads = -1;  // Pairs processed in parallel; -1: all cores.
+  // The stage's one seed: each pair's verification RANSAC draws from a seed derived from it
+  // and the pair's ids, and a vocabulary tree trained for retrieval samples with it.
+  uint64_t seed = 0;
   // Pairs written per transaction; a killed run loses at most one batch.
   int batch_size = 500;
   void Check() const;

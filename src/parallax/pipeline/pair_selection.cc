@@ -68,7 +68,7 @@ VocabularyTree::RowMatrixXf SampleTrainingDescriptors(const std::vector<image_t>
 // one trained on the collection and saved there.
 VocabularyTree LoadOrTrainTree(const RetrievalPairOptions& options,
                                const std::vector<image_t>& image_ids, const Database& database,
-                               int num_threads, PairSelection* selection) {
+                               int num_threads, uint64_t seed, PairSelection* selection) {
   const int dimension =
       image_ids.empty() ? -1 : static_cast<int>(database.ReadDescriptors(image_ids[0]).cols());
   const std::filesystem::path saved = DefaultVocabTreePath(database.Path());
@@ -79,6 +79,7 @@ VocabularyTree LoadOrTrainTree(const RetrievalPairOptions& options,
   const Timer timer;
   VocabularyTreeOptions tree_options = options.tree;
   tree_options.num_threads = num_threads;
+  tree_options.seed = seed;
   const VocabularyTree::RowMatrixXf training = SampleTrainingDescriptors(
       image_ids, database, tree_options.max_training_descriptors, tree_options.seed);
   VocabularyTree tree = VocabularyTree::Train(training, tree_options);
@@ -93,9 +94,10 @@ VocabularyTree LoadOrTrainTree(const RetrievalPairOptions& options,
 
 std::vector<ImagePair> SelectRetrievalPairs(const PairSelectionOptions& options,
                                             const std::vector<image_t>& image_ids,
-                                            const Database& database, PairSelection* selection) {
+                                            const Database& database, uint64_t seed,
+                                            PairSelection* selection) {
   const VocabularyTree tree =
-      LoadOrTrainTree(options.retrieval, image_ids, database, options.num_threads, selection);
+      LoadOrTrainTree(options.retrieval, image_ids, database, options.num_threads, seed, selection);
   const Timer timer;
   RetrievalIndex index(tree.NumWords());
   for (const image_t image_id : image_ids) {
@@ -342,7 +344,8 @@ PairMode ResolvedPairMode(const PairSelectionOptions& options, size_t num_images
 }
 
 PairSelection SelectPairs(const PairSelectionOptions& options,
-                          const std::vector<image_t>& image_ids, const Database& database) {
+                          const std::vector<image_t>& image_ids, const Database& database,
+                          uint64_t seed) {
   options.Check();
   const Timer timer;
   PairSelection selection;
@@ -383,7 +386,7 @@ PairSelection SelectPairs(const PairSelectionOptions& options,
         break;
       case PairMode::kRetrieval: {
         const std::vector<ImagePair> found =
-            SelectRetrievalPairs(options, image_ids, database, &selection);
+            SelectRetrievalPairs(options, image_ids, database, seed, &selection);
         selection.num_retrieval_pairs = found.size();
         pairs.insert(pairs.end(), found.begin(), found.end());
         break;

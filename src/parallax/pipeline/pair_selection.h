@@ -125,8 +125,10 @@ std::filesystem::path DefaultVocabTreePath(const std::filesystem::path& database
 // adds spatial pairs when enough images have GPS).
 PairMode ResolvedPairMode(const PairSelectionOptions& options, size_t num_images);
 
-// Chooses the pairs to match among `image_ids` (sorted by name) of `database`.
+// Chooses the pairs to match among `image_ids` (sorted by name) of `database`. `seed`: of
+// the vocabulary tree's training, when retrieval trains one (its options' seed is not used).
 PairSelection SelectPairs(const PairSelectionOptions& options,
-                          const std::vector<image_t>& image_ids, const Database& database);
+                          const std::vector<image_t>& image_ids, const Database& database,
+                          uint64_t seed = 0);
 
 }  // namespace parallax

@@ -18,10 +18,14 @@ void ReconstructionPipelineOptions::Check() const {
   mapping.Check();
 }
 
+void SetSeed(uint64_t seed, ReconstructionPipelineOptions* options) {
+  options->matching.seed = seed;
+  options->mapping.mapper.seed = seed;
+}
+
 void SetSeedAndThreads(uint64_t seed, int num_threads, bool keep_ba_threads,
                        ReconstructionPipelineOptions* options) {
-  options->matching.geometry.ransac.random_seed = seed;
-  options->mapping.mapper.absolute_pose.ransac.random_seed = seed;
+  SetSeed(seed, options);
   options->extraction.num_threads = num_threads;
   options->matching.num_threads = num_threads;
   options->mapping.hierarchical.num_threads = num_threads;

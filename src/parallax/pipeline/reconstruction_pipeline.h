@@ -65,6 +65,10 @@ class StageSharing {
                                  const std::filesystem::path& output_dir) = 0;
 };
 
+// The run-wide --seed: the seed of each randomised stage (matching's and mapping's; each
+// derives the seeds of its steps from its own).
+void SetSeed(uint64_t seed, ReconstructionPipelineOptions* options);
+
 // The run-wide --seed and --threads of `parallax reconstruct`: the seed of verification and
 // registration, the worker threads of every stage, bundle adjustment's too unless
 // `keep_ba_threads` (--ba-threads was given).

@@ -104,6 +104,8 @@ TEST(ReconstructionPipeline, PhotosAddedLaterAreRegisteredIntoTheEarlierModel) {
   ASSERT_TRUE(second.evaluation.has_value());
   EXPECT_LT(second.evaluation->rotation_error_deg.median, 0.1);
   EXPECT_LT(second.evaluation->center_error_ratio.median, 0.002);
+  EXPECT_EQ(second.summary["mapper"]["type"], "incremental");
+  EXPECT_FALSE(second.summary["mapper"].contains("type_reason"));  // The default, not chosen.
   EXPECT_EQ(second.summary["mapper"]["input_model"]["images_kept"], 12);
   EXPECT_EQ(second.summary["mapper"]["input_model"]["images_missing"].size(), 2u);
   // Where the mapping time went, by phase; the adjustments' share is the solver's time.

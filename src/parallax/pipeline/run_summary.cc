@@ -49,12 +49,16 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
   for (const auto& [name, seconds] : result.summary.phase_seconds.Named()) {
     phase_times[name] = seconds;
   }
-  summary["mapper"] = {{"local_bundle_adjustments", result.summary.num_local_ba},
+  summary["mapper"] = {{"type", result.hierarchical ? "hierarchical" : "incremental"},
+                       {"local_bundle_adjustments", result.summary.num_local_ba},
                        {"global_bundle_adjustments", result.summary.num_global_ba},
                        {"bundle_adjustment_s", result.summary.BaSeconds()},
                        {"phase_s", phase_times},
                        {"load_s", result.load_seconds},
                        {"write_s", result.write_seconds}};
+  if (!result.mapper_type_reason.empty()) {
+    summary["mapper"]["type_reason"] = result.mapper_type_reason;
+  }
   if (result.num_input_model_images > 0 || !result.input_model_images_missing.empty()) {
     // An extended model: the images that kept their poses, and those that are gone.
     summary["mapper"]["input_model"] = {{"images_kept", result.num_input_model_images},

@@ -46,8 +46,7 @@ std::vector<Reconstruction> HierarchicalMapper::MapCluster(
   for (BundleAdjustmentOptions* ba : options.BundleAdjustments()) {
     ba->num_threads = std::max(1, EffectiveNumThreads(ba->num_threads) / num_side_by_side);
   }
-  options.absolute_pose.ransac.random_seed =
-      DeriveSeed(mapper_options_.absolute_pose.ransac.random_seed, index);
+  options.seed = DeriveSeed(mapper_options_.seed, index);
   IncrementalMapper mapper(options, part);
   if (progress != nullptr) mapper.SetProgress(progress);
   MapperSummary cluster_summary;
@@ -105,7 +104,10 @@ std::vector<Reconstruction> HierarchicalMapper::MergeAndRefine(
     }
   }
   std::vector<ModelMergeReport> merges;
-  const Reconstruction merged = MergeModels(options_.merge, models, &merges);
+  // The merges draw from the mapping's one seed, as the clusters' registrations do.
+  ModelMergerOptions merge_options = options_.merge;
+  merge_options.seed = DeriveSeed(mapper_options_.seed, cluster_models.size());
+  const Reconstruction merged = MergeModels(merge_options, models, &merges);
   for (size_t m = 0; m < models.size(); ++m) {
     report.clusters[origin[m].first].merges.push_back(merges[m]);
   }

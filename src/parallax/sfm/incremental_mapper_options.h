@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 
 #include "parallax/estimators/absolute_pose.h"
 #include "parallax/estimators/bundle_adjustment.h"
@@ -10,6 +11,9 @@
 namespace parallax {
 
 struct IncrementalMapperOptions {
+  // The mapper's one seed: registration's PnP RANSAC draws from a seed derived from it per
+  // image and attempt, so the same seed registers the same way whatever came before.
+  uint64_t seed = 0;
   // Initial pair.
   int init_min_num_inliers = 100;  // Triangulated points the initial pair must give.
   double init_min_triangulation_angle_deg =

@@ -286,7 +286,7 @@ bool ModelBuilder::EstimatePoseAndRegister(image_t image_id, MapperImageReport* 
   // same way whatever came before.
   AbsolutePoseEstimationOptions pose_options = options_.absolute_pose;
   pose_options.ransac.random_seed =
-      DeriveSeed(options_.absolute_pose.ransac.random_seed,
+      DeriveSeed(options_.seed,
                  (static_cast<uint64_t>(image_id) << 8) | (report->num_registration_trials & 0xff));
   const AbsolutePoseReport pose = EstimateAbsolutePose(camera, points2D, points3D, pose_options);
   report->num_pnp_inliers = pose.num_inliers;

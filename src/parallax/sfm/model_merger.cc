@@ -97,6 +97,7 @@ ModelMergeReport EstimateMergedFromModel(const ModelMergerOptions& options,
   report.num_correspondences = model_points.size();
   if (static_cast<int>(model_points.size()) < options.min_inlier_points) return report;
   RansacOptions ransac_options = options.ransac;
+  ransac_options.random_seed = options.seed;
   ransac_options.max_error = options.max_error_fraction * MedianDistanceFromMedian(merged_points);
   const Sim3dRansacReport sim3 = EstimateSim3dRansac(model_points, merged_points, ransac_options);
   report.num_inliers = sim3.num_inliers;

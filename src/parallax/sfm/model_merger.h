@@ -16,8 +16,10 @@ struct ModelMergerOptions {
   // Inlier distance of the similarity RANSAC, as a share of the spread of the shared points
   // (their median distance from their median): independent of each model's arbitrary scale.
   double max_error_fraction = 0.01;
-  // The similarity's RANSAC (its max_error is set from the fraction above).
+  // The similarity's RANSAC (its max_error is set from the fraction above, its seed from
+  // `seed`).
   RansacOptions ransac = Sim3dRansacOptions(1.0);
+  uint64_t seed = 0;  // Of the similarity RANSAC of every merge.
   void Check() const;
 };
 
