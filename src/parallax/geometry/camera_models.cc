@@ -7,23 +7,78 @@
 
 namespace parallax {
 
+template <typename Traits>
+Eigen::Vector2d CameraModel<Traits>::CamFromImg(const double* params, const Eigen::Vector2d& xy) {
+  // Undo focal length and principal point: distorted normalised coordinates.
+  const double fx = params[Traits::kFocalIdxs.front()];
+  const double fy = params[Traits::kFocalIdxs.back()];
+  const Eigen::Vector2d distorted((xy.x() - params[Traits::kPrincipalPointIdxs[0]]) / fx,
+                                  (xy.y() - params[Traits::kPrincipalPointIdxs[1]]) / fy);
+  if constexpr (kNumExtraParams == 0) {
+    return distorted;
+  } else {
+    // Solve u + d(u) = distorted for u with Newton steps and a numeric Jacobian of d.
+    Eigen::Vector2d undistorted = distorted;
+    constexpr int kMaxIterations = 100;
+    constexpr double kStep = 1e-7;
+    const auto apply = [&](const Eigen::Vector2d& u) {
+      Eigen::Vector2d d;
+      Traits::Distortion(params, u.x(), u.y(), &d.x(), &d.y());
+      return Eigen::Vector2d(u + d);
+    };
+    for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
+      const Eigen::Vector2d residual = apply(undistorted) - distorted;
+      Eigen::Matrix2d jacobian;
+      for (int axis = 0; axis < 2; ++axis) {
+        Eigen::Vector2d shifted = undistorted;
+        const double h = kStep * std::max(1.0, std::abs(undistorted(axis)));
+        shifted(axis) += h;
+        jacobian.col(axis) = (apply(shifted) - apply(undistorted)) / h;
+      }
+      const Eigen::Vector2d step = jacobian.partialPivLu().solve(residual);
+      if (!step.allFinite()) break;
+      undistorted -= step;
+      if (step.squaredNorm() < 1e-24) break;
+    }
+    return undistorted;
+  }
+}
+
+// The registered models' CamFromImg, compiled here once.
+#define PARALLAX_CAMERA_MODEL_INSTANCE(Name) template struct CameraModel<Name##Traits>;
+PARALLAX_CAMERA_MODELS(PARALLAX_CAMERA_MODEL_INSTANCE)
+#undef PARALLAX_CAMERA_MODEL_INSTANCE
+
 void ThrowInvalidCameraModel(int model_id) {
   PARALLAX_CHECK_MSG(false, "invalid camera model id " << model_id);
 }
 
-bool ExistsCameraModel(int model_id) { return model_id >= 0 && model_id <= 4; }
+bool ExistsCameraModel(int model_id) {
+  // A case per registered model: two models with one id do not compile.
+  switch (model_id) {
+#define PARALLAX_CAMERA_MODEL_CASE(Name) case Name##Traits::kColmapId:
+    PARALLAX_CAMERA_MODELS(PARALLAX_CAMERA_MODEL_CASE)
+#undef PARALLAX_CAMERA_MODEL_CASE
+    return true;
+    default:
+      return false;
+  }
+}
 
 std::string CameraModelName(CameraModelId model_id) {
   return VisitCameraModel(model_id, []<typename Model>() { return std::string(Model::kName); });
 }
 
 CameraModelId CameraModelIdFromName(const std::string& name) {
-  for (int id = 0; id <= 4; ++id) {
-    if (CameraModelName(static_cast<CameraModelId>(id)) == name) {
-      return static_cast<CameraModelId>(id);
-    }
+  for (const CameraModelId id : kCameraModelIds) {
+    if (CameraModelName(id) == name) return id;
   }
   return CameraModelId::kInvalid;
+}
+
+std::string CameraModelParamsInfo(CameraModelId model_id) {
+  return VisitCameraModel(model_id,
+                          []<typename Model>() { return std::string(Model::kParamsInfo); });
 }
 
 int CameraModelNumParams(CameraModelId model_id) {
@@ -44,11 +99,7 @@ std::vector<int> CameraModelPrincipalPointIdxs(CameraModelId model_id) {
 
 std::vector<int> CameraModelExtraIdxs(CameraModelId model_id) {
   return VisitCameraModel(model_id, []<typename Model>() {
-    std::vector<int> idxs;
-    for (int i = Model::kNumParams - Model::kNumExtraParams; i < Model::kNumParams; ++i) {
-      idxs.push_back(i);
-    }
-    return idxs;
+    return std::vector<int>(Model::kExtraIdxs.begin(), Model::kExtraIdxs.end());
   });
 }
 
@@ -78,40 +129,7 @@ Eigen::Vector2d CameraModelCamFromImg(CameraModelId model_id, const std::vector<
                                       const Eigen::Vector2d& xy) {
   return VisitCameraModel(model_id, [&]<typename Model>() {
     PARALLAX_CHECK_EQ(static_cast<int>(params.size()), Model::kNumParams);
-    const double* p = params.data();
-    // Undo focal length and principal point: distorted normalised coordinates.
-    const double fx = p[Model::kFocalIdxs[0]];
-    const double fy = p[Model::kFocalIdxs[Model::kFocalIdxs.size() - 1]];
-    const Eigen::Vector2d distorted((xy.x() - p[Model::kPrincipalPointIdxs[0]]) / fx,
-                                    (xy.y() - p[Model::kPrincipalPointIdxs[1]]) / fy);
-    if constexpr (Model::kNumExtraParams == 0) {
-      return distorted;
-    } else {
-      // Solve u + d(u) = distorted for u with Newton steps and a numeric Jacobian of d.
-      Eigen::Vector2d undistorted = distorted;
-      constexpr int kMaxIterations = 100;
-      constexpr double kStep = 1e-7;
-      for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
-        auto apply = [&](const Eigen::Vector2d& u) {
-          Eigen::Vector2d d;
-          Model::Distortion(p, u.x(), u.y(), &d.x(), &d.y());
-          return Eigen::Vector2d(u + d);
-        };
-        const Eigen::Vector2d residual = apply(undistorted) - distorted;
-        Eigen::Matrix2d jacobian;
-        for (int axis = 0; axis < 2; ++axis) {
-          Eigen::Vector2d shifted = undistorted;
-          const double h = kStep * std::max(1.0, std::abs(undistorted(axis)));
-          shifted(axis) += h;
-          jacobian.col(axis) = (apply(shifted) - apply(undistorted)) / h;
-        }
-        const Eigen::Vector2d step = jacobian.partialPivLu().solve(residual);
-        if (!step.allFinite()) break;
-        undistorted -= step;
-        if (step.squaredNorm() < 1e-24) break;
-      }
-      return undistorted;
-    }
+    return Model::CamFromImg(params.data(), xy);
   });
 }
 
