@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "parallax/geometry/testing/random_geometry.h"
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
 
@@ -41,12 +42,7 @@ Camera MakeCamera(CameraModelId model_id) {
 Scene RandomScene(const Camera& camera, size_t num_points, double noise_px, double outlier_ratio) {
   Scene scene;
   scene.camera = camera;
-  const Eigen::Vector3d axis(RandomUniformReal(-1, 1), RandomUniformReal(-1, 1),
-                             RandomUniformReal(-1, 1));
-  scene.cam_from_world = Rigid3d(
-      Eigen::Quaterniond(Eigen::AngleAxisd(RandomUniformReal(-M_PI, M_PI), axis.normalized())),
-      Eigen::Vector3d(RandomUniformReal(-3, 3), RandomUniformReal(-3, 3),
-                      RandomUniformReal(-3, 3)));
+  scene.cam_from_world = test::RandomCamFromWorld(3);
   const Rigid3d world_from_cam = scene.cam_from_world.Inverse();
   for (size_t i = 0; i < num_points; ++i) {
     const Eigen::Vector2d pixel(RandomUniformReal(0, camera.width),

@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "parallax/estimators/solvers/fundamental_matrix.h"
+#include "parallax/estimators/testing/matched_pair.h"
 #include "parallax/geometry/triangulation.h"
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
@@ -16,100 +17,19 @@
 namespace parallax {
 namespace {
 
-constexpr size_t kWidth = 1024, kHeight = 768;
-
-Eigen::Vector3d RandomUnitVector() {
-  return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
-      .normalized();
-}
-
-enum class Structure { kGeneral, kPlane, kLine };
-
-// Two cameras, keypoints of both images and their matches. Image 2's keypoints are stored in
-// shuffled order with unmatched extras, so match indices are not the identity.
-struct Scene {
-  Camera camera1 = Camera::Create(1, CameraModelId::kSimplePinhole, 1000, kWidth, kHeight);
-  Camera camera2 = Camera::Create(2, CameraModelId::kPinhole, 1100, kWidth, kHeight);
-  Rigid3d cam2_from_cam1;
-  std::vector<Eigen::Vector3d> points3D;  // Per match, in cam1.
-  std::vector<Eigen::Vector2d> points1, points2;
-  FeatureMatches matches;
-  std::vector<char> is_inlier;  // Per match.
-
-  // The true median triangulation angle of the inlier matches.
-  double TrueTriAngle() const {
-    std::vector<double> angles;
-    for (size_t i = 0; i < points3D.size(); ++i) {
-      if (is_inlier[i]) {
-        angles.push_back(CalculateTriangulationAngle(
-            Eigen::Vector3d::Zero(), ProjectionCenter(cam2_from_cam1), points3D[i]));
-      }
-    }
-    std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
-    return angles[angles.size() / 2];
-  }
-};
-
-Eigen::Vector2d RandomPixel() {
-  return Eigen::Vector2d(RandomUniformReal(0, kWidth), RandomUniformReal(0, kHeight));
-}
-
-Scene MakeScene(int num_matches, double noise_px, double outlier_ratio, Structure structure,
-                Eigen::Vector3d translation = RandomUnitVector()) {
-  Scene scene;
-  scene.cam2_from_cam1 = Rigid3d(
-      Eigen::Quaterniond(Eigen::AngleAxisd(RandomUniformReal(0.05, 0.3), RandomUnitVector())),
-      translation);
-  const Eigen::Vector3d normal = (Eigen::Vector3d(0, 0, 1) + 0.3 * RandomUnitVector()).normalized();
-  const Eigen::Vector3d line_direction = RandomUnitVector();
-  std::vector<Eigen::Vector2d> matched2;
-  while (static_cast<int>(scene.points3D.size()) < num_matches) {
-    const Eigen::Vector3d ray =
-        scene.camera1.CalibrationMatrix().inverse() * RandomPixel().homogeneous();
-    Eigen::Vector3d point = RandomUniformReal(4, 10) * ray;
-    if (structure == Structure::kPlane) point = ray * 6.0 / normal.dot(ray);
-    if (structure == Structure::kLine) {
-      point = Eigen::Vector3d(0, 0, 6) + RandomUniformReal(-2, 2) * line_direction;
-    }
-    const Eigen::Vector3d in_cam2 = scene.cam2_from_cam1 * point;
-    if (point.z() < 0.5 || in_cam2.z() < 0.5) continue;
-    const Eigen::Vector2d pixel1 = scene.camera1.ImgFromCam(point);
-    const Eigen::Vector2d pixel2 = scene.camera2.ImgFromCam(in_cam2);
-    if (pixel1.x() < 0 || pixel1.x() > kWidth || pixel1.y() < 0 || pixel1.y() > kHeight ||
-        pixel2.x() < 0 || pixel2.x() > kWidth || pixel2.y() < 0 || pixel2.y() > kHeight) {
-      continue;
-    }
-    const bool inlier = RandomUniformReal(0, 1) >= outlier_ratio;
-    scene.points3D.push_back(point);
-    scene.is_inlier.push_back(inlier);
-    scene.points1.push_back(
-        pixel1 + Eigen::Vector2d(RandomGaussian(0, noise_px), RandomGaussian(0, noise_px)));
-    matched2.push_back(inlier
-                           ? Eigen::Vector2d(pixel2 + Eigen::Vector2d(RandomGaussian(0, noise_px),
-                                                                      RandomGaussian(0, noise_px)))
-                           : RandomPixel());
-  }
-  // Shuffle image 2's keypoints and add unmatched ones.
-  std::vector<size_t> order(matched2.size() + 20);
-  std::iota(order.begin(), order.end(), 0);
-  Shuffle(order.size(), &order);
-  scene.points2.resize(order.size());
-  scene.matches.resize(matched2.size());
-  for (size_t slot = 0; slot < order.size(); ++slot) {
-    scene.points2[slot] = order[slot] < matched2.size() ? matched2[order[slot]] : RandomPixel();
-    if (order[slot] < matched2.size()) {
-      scene.matches[order[slot]] = {static_cast<point2D_t>(order[slot]),
-                                    static_cast<point2D_t>(slot)};
-    }
-  }
-  return scene;
-}
+using test::kImageHeight;
+using test::kImageWidth;
+using test::MatchedPair;
+using test::PairStructure;
+using test::RandomCalibratedPair;
+using test::RandomImagePoint;
+using test::RandomMatchedPair;
 
 struct InlierCounts {
   size_t inliers_kept = 0, outliers_kept = 0, num_true_inliers = 0;
 };
 
-InlierCounts CountInliers(const Scene& scene, const TwoViewGeometry& geometry) {
+InlierCounts CountInliers(const MatchedPair& scene, const TwoViewGeometry& geometry) {
   InlierCounts counts;
   for (char inlier : scene.is_inlier) counts.num_true_inliers += inlier;
   for (const FeatureMatch& match : geometry.inlier_matches) {
@@ -118,7 +38,7 @@ InlierCounts CountInliers(const Scene& scene, const TwoViewGeometry& geometry) {
   return counts;
 }
 
-void ExpectGoodInliers(const Scene& scene, const TwoViewGeometry& geometry) {
+void ExpectGoodInliers(const MatchedPair& scene, const TwoViewGeometry& geometry) {
   const InlierCounts counts = CountInliers(scene, geometry);
   std::cerr << "kept " << counts.inliers_kept << "/" << counts.num_true_inliers << " inliers, "
             << counts.outliers_kept << "/" << scene.is_inlier.size() - counts.num_true_inliers
@@ -143,23 +63,15 @@ TwoViewGeometryOptions NoisyOptions() {
   return options;
 }
 
-TwoViewGeometry Estimate(const Scene& scene, const TwoViewGeometryOptions& options = {}) {
+TwoViewGeometry Estimate(const MatchedPair& scene, const TwoViewGeometryOptions& options = {}) {
   return EstimateTwoViewGeometry(scene.camera1, scene.points1, scene.camera2, scene.points2,
                                  scene.matches, options);
-}
-
-Scene CalibratedScene(int num_matches, double noise_px, double outlier_ratio,
-                      Structure structure = Structure::kGeneral) {
-  Scene scene = MakeScene(num_matches, noise_px, outlier_ratio, structure);
-  scene.camera1.has_prior_focal_length = true;
-  scene.camera2.has_prior_focal_length = true;
-  return scene;
 }
 
 TEST(EstimateTwoViewGeometry, CalibratedExactRecoversPose) {
   SetPRNGSeed(1);
   for (int trial = 0; trial < 5; ++trial) {
-    const Scene scene = CalibratedScene(200, 0.0, 0.0);
+    const MatchedPair scene = RandomCalibratedPair(200, 0.0, 0.0);
     const TwoViewGeometry geometry = Estimate(scene);
     ASSERT_EQ(geometry.config, TwoViewGeometry::kCalibrated);
     EXPECT_EQ(geometry.inlier_matches.size(), scene.matches.size());
@@ -178,7 +90,7 @@ TEST(EstimateTwoViewGeometry, CalibratedExactRecoversPose) {
 TEST(EstimateTwoViewGeometry, CalibratedNoiseAndOutliers) {
   SetPRNGSeed(2);
   for (int trial = 0; trial < 3; ++trial) {
-    const Scene scene = CalibratedScene(1000, 0.5, 0.4);
+    const MatchedPair scene = RandomCalibratedPair(1000, 0.5, 0.4);
     const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
     ASSERT_EQ(geometry.config, TwoViewGeometry::kCalibrated);
     ExpectGoodInliers(scene, geometry);
@@ -194,7 +106,7 @@ TEST(EstimateTwoViewGeometry, CalibratedNoiseAndOutliers) {
 TEST(EstimateTwoViewGeometry, UncalibratedNoiseAndOutliers) {
   SetPRNGSeed(3);
   for (int trial = 0; trial < 3; ++trial) {
-    const Scene scene = MakeScene(1000, 0.5, 0.4, Structure::kGeneral);
+    const MatchedPair scene = RandomMatchedPair(1000, 0.5, 0.4, PairStructure::kGeneral);
     const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
     ASSERT_EQ(geometry.config, TwoViewGeometry::kUncalibrated);
     ExpectGoodInliers(scene, geometry);
@@ -207,7 +119,7 @@ TEST(EstimateTwoViewGeometry, UncalibratedNoiseAndOutliers) {
               2.0);
   }
   // Priors present but E switched off.
-  const Scene scene = CalibratedScene(300, 0.5, 0.2);
+  const MatchedPair scene = RandomCalibratedPair(300, 0.5, 0.2);
   TwoViewGeometryOptions options;
   options.use_essential_when_calibrated = false;
   EXPECT_EQ(Estimate(scene, options).config, TwoViewGeometry::kUncalibrated);
@@ -217,7 +129,8 @@ TEST(EstimateTwoViewGeometry, PlanarSceneIsDetected) {
   SetPRNGSeed(4);
   for (const double noise : {0.0, 0.5}) {
     for (const bool calibrated : {false, true}) {
-      Scene scene = MakeScene(1000, noise, noise > 0 ? 0.4 : 0.0, Structure::kPlane);
+      MatchedPair scene =
+          RandomMatchedPair(1000, noise, noise > 0 ? 0.4 : 0.0, PairStructure::kPlane);
       scene.camera1.has_prior_focal_length = calibrated;
       scene.camera2.has_prior_focal_length = calibrated;
       // H's transfer error carries the noise of both images: at 1.5 px H keeps ~85 % of the
@@ -238,8 +151,8 @@ TEST(EstimateTwoViewGeometry, PlanarSceneIsDetected) {
 TEST(EstimateTwoViewGeometry, PureRotationIsPanoramic) {
   SetPRNGSeed(5);
   for (const double noise : {0.0, 0.5}) {
-    Scene scene =
-        MakeScene(1000, noise, noise > 0 ? 0.4 : 0.0, Structure::kGeneral, Eigen::Vector3d::Zero());
+    MatchedPair scene = RandomMatchedPair(1000, noise, noise > 0 ? 0.4 : 0.0,
+                                          PairStructure::kGeneral, Eigen::Vector3d::Zero());
     scene.camera1.has_prior_focal_length = true;
     scene.camera2.has_prior_focal_length = true;
     // A panoramic pair keeps H's inliers, whose transfer error carries the noise of both
@@ -258,7 +171,7 @@ TEST(EstimateTwoViewGeometry, PureRotationIsPanoramic) {
 
 TEST(EstimateTwoViewGeometry, TooFewMatchesIsDegenerate) {
   SetPRNGSeed(6);
-  const Scene scene = CalibratedScene(10, 0.0, 0.0);
+  const MatchedPair scene = RandomCalibratedPair(10, 0.0, 0.0);
   TwoViewGeometry geometry = Estimate(scene);
   EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
   EXPECT_TRUE(geometry.inlier_matches.empty());
@@ -266,7 +179,7 @@ TEST(EstimateTwoViewGeometry, TooFewMatchesIsDegenerate) {
   EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
   EXPECT_TRUE(geometry.inlier_matches.empty());
   // Enough matches, too few of them consistent.
-  const Scene outliers = CalibratedScene(40, 0.5, 0.95);
+  const MatchedPair outliers = RandomCalibratedPair(40, 0.5, 0.95);
   geometry = Estimate(outliers);
   EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate);
   EXPECT_TRUE(geometry.inlier_matches.empty());
@@ -274,13 +187,13 @@ TEST(EstimateTwoViewGeometry, TooFewMatchesIsDegenerate) {
 
 // n matches between random keypoints: uniform over the image, or clustered in a 250 x 200
 // box as on an object before a black background (templeRing), where chance fits are likelier.
-Scene RandomMatches(int num_matches, bool clustered, bool calibrated) {
-  Scene scene;
+MatchedPair RandomMatches(int num_matches, bool clustered, bool calibrated) {
+  MatchedPair scene;
   scene.camera1.has_prior_focal_length = calibrated;
   scene.camera2.has_prior_focal_length = calibrated;
   const auto random_point = [&] {
     return clustered ? Eigen::Vector2d(RandomUniformReal(400, 650), RandomUniformReal(300, 500))
-                     : RandomPixel();
+                     : RandomImagePoint();
   };
   for (int i = 0; i < num_matches; ++i) {
     scene.points1.push_back(random_point());
@@ -303,7 +216,7 @@ TEST(EstimateTwoViewGeometry, RandomMatchesAreRejected) {
     for (int pair = 0; pair < num_pairs; ++pair) {
       for (const bool clustered : {false, true}) {
         for (const bool calibrated : {false, true}) {
-          const Scene scene = RandomMatches(num_matches, clustered, calibrated);
+          const MatchedPair scene = RandomMatches(num_matches, clustered, calibrated);
           const TwoViewGeometry geometry = Estimate(scene);
           EXPECT_EQ(geometry.config, TwoViewGeometry::kDegenerate)
               << num_matches << " matches, clustered " << clustered << ", calibrated " << calibrated
@@ -328,7 +241,7 @@ TEST(EstimateTwoViewGeometry, RandomMatchesAreRejected) {
 TEST(EstimateTwoViewGeometry, CalibratedPairsThatEDoesNotExplainFallBackToFOnlyWhenAsked) {
   SetPRNGSeed(21);
   for (int trial = 0; trial < 5; ++trial) {
-    Scene scene = CalibratedScene(300, 0.5, 0.2);
+    MatchedPair scene = RandomCalibratedPair(300, 0.5, 0.2);
     // Image 2 sheared: still one epipolar geometry (F), but not that of its prior, a pinhole
     // without skew, so no E explains it.
     for (Eigen::Vector2d& point : scene.points2) point.x() += 0.5 * point.y();
@@ -347,7 +260,7 @@ TEST(EstimateTwoViewGeometry, CalibratedPairsThatEDoesNotExplainFallBackToFOnlyW
     EXPECT_LE(counts.outliers_kept, 4u) << trial;
   }
   // Where E explains the pair, the option changes nothing.
-  const Scene scene = CalibratedScene(300, 0.5, 0.2);
+  const MatchedPair scene = RandomCalibratedPair(300, 0.5, 0.2);
   for (const bool fallback : {false, true}) {
     TwoViewGeometryOptions options = NoisyOptions();
     options.uncalibrated_fallback = fallback;
@@ -361,7 +274,7 @@ TEST(EstimateTwoViewGeometry, RealPairsWithFortyPercentOutliersAreKept) {
   for (const int num_matches : {30, 50, 100, 300}) {
     for (int pair = 0; pair < 4; ++pair) {
       for (const bool calibrated : {false, true}) {
-        Scene scene = MakeScene(num_matches, 0.5, 0.4, Structure::kGeneral);
+        MatchedPair scene = RandomMatchedPair(num_matches, 0.5, 0.4, PairStructure::kGeneral);
         scene.camera1.has_prior_focal_length = calibrated;
         scene.camera2.has_prior_focal_length = calibrated;
         const TwoViewGeometry geometry = Estimate(scene, NoisyOptions());
@@ -387,7 +300,7 @@ TEST(EstimateTwoViewGeometry, RealPairsWithFortyPercentOutliersAreKept) {
 
 TEST(EstimateTwoViewGeometry, NonFiniteKeypointsAreIgnored) {
   SetPRNGSeed(7);
-  Scene scene = CalibratedScene(300, 0.5, 0.2);
+  MatchedPair scene = RandomCalibratedPair(300, 0.5, 0.2);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<size_t> poisoned;
@@ -411,7 +324,7 @@ TEST(EstimateTwoViewGeometry, NonFiniteKeypointsAreIgnored) {
 TEST(EstimateTwoViewGeometry, DuplicateAndCollinearPointsAreDegenerate) {
   SetPRNGSeed(8);
   // All matches between one pair of points.
-  Scene scene = CalibratedScene(100, 0.0, 0.0);
+  MatchedPair scene = RandomCalibratedPair(100, 0.0, 0.0);
   for (Eigen::Vector2d& point : scene.points1) point = Eigen::Vector2d(100, 200);
   for (Eigen::Vector2d& point : scene.points2) point = Eigen::Vector2d(300, 400);
   for (const bool calibrated : {false, true}) {
@@ -423,7 +336,7 @@ TEST(EstimateTwoViewGeometry, DuplicateAndCollinearPointsAreDegenerate) {
   // 3D points on one line, exact and noisy.
   for (const double noise : {0.0, 0.5}) {
     for (const bool calibrated : {false, true}) {
-      Scene line = MakeScene(200, noise, 0.0, Structure::kLine);
+      MatchedPair line = RandomMatchedPair(200, noise, 0.0, PairStructure::kLine);
       line.camera1.has_prior_focal_length = calibrated;
       line.camera2.has_prior_focal_length = calibrated;
       const TwoViewGeometry geometry = Estimate(line);
@@ -434,7 +347,7 @@ TEST(EstimateTwoViewGeometry, DuplicateAndCollinearPointsAreDegenerate) {
   }
   // Twelve real matches, each repeated three times: 36 consistent matches but 12 keypoints,
   // below min_num_inliers.
-  Scene repeated = CalibratedScene(12, 0.0, 0.0);
+  MatchedPair repeated = RandomCalibratedPair(12, 0.0, 0.0);
   const FeatureMatches originals = repeated.matches;
   for (int copy = 0; copy < 2; ++copy) {
     repeated.matches.insert(repeated.matches.end(), originals.begin(), originals.end());
@@ -446,7 +359,7 @@ TEST(EstimateTwoViewGeometry, DuplicateAndCollinearPointsAreDegenerate) {
     EXPECT_TRUE(geometry.inlier_matches.empty());
   }
   // Half of a good scene duplicated: still verified.
-  Scene duplicated = CalibratedScene(200, 0.5, 0.0);
+  MatchedPair duplicated = RandomCalibratedPair(200, 0.5, 0.0);
   const size_t num_matches = duplicated.matches.size();
   for (size_t i = 0; i < num_matches; i += 2) duplicated.matches.push_back(duplicated.matches[i]);
   duplicated.is_inlier.resize(duplicated.matches.size(), 1);
@@ -458,10 +371,10 @@ TEST(EstimateTwoViewGeometry, DuplicateAndCollinearPointsAreDegenerate) {
 TEST(EstimateTwoViewGeometry, WatermarkIsDetected) {
   SetPRNGSeed(9);
   // A logo in the bottom-left corner at the same place in both images, a few scene matches.
-  Scene scene = CalibratedScene(20, 0.5, 0.0);
+  MatchedPair scene = RandomCalibratedPair(20, 0.5, 0.0);
   for (int i = 0; i < 200; ++i) {
     const Eigen::Vector2d logo(RandomUniformReal(5, 90),
-                               RandomUniformReal(kHeight - 70, kHeight - 5));
+                               RandomUniformReal(kImageHeight - 70, kImageHeight - 5));
     scene.points1.push_back(logo);
     scene.points2.push_back(logo + Eigen::Vector2d(RandomGaussian(0, 0.3), RandomGaussian(0, 0.3)));
     scene.matches.push_back({static_cast<point2D_t>(scene.points1.size() - 1),
@@ -473,7 +386,7 @@ TEST(EstimateTwoViewGeometry, WatermarkIsDetected) {
 
 TEST(EstimateTwoViewGeometry, RejectsBadOptionsAndIndices) {
   SetPRNGSeed(10);
-  const Scene scene = CalibratedScene(50, 0.0, 0.0);
+  const MatchedPair scene = RandomCalibratedPair(50, 0.0, 0.0);
   TwoViewGeometryOptions options;
   options.ransac.max_error = 0.0;
   EXPECT_THROW(Estimate(scene, options), CheckError);
@@ -489,7 +402,7 @@ TEST(EstimateTwoViewGeometry, RejectsBadOptionsAndIndices) {
 
 TEST(EstimateTwoViewGeometryPose, FromFundamentalAndRefusals) {
   SetPRNGSeed(11);
-  const Scene scene = MakeScene(300, 0.0, 0.0, Structure::kGeneral);
+  const MatchedPair scene = RandomMatchedPair(300, 0.0, 0.0, PairStructure::kGeneral);
   TwoViewGeometryOptions options;
   options.compute_relative_pose = false;
   TwoViewGeometry geometry = Estimate(scene, options);

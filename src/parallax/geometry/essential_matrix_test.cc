@@ -8,24 +8,19 @@
 #include <cmath>
 #include <limits>
 
+#include "parallax/geometry/testing/random_geometry.h"
 #include "parallax/math/random.h"
 
 namespace parallax {
 namespace {
 
+using test::CalibrationMatrix;
 using test::EigenMatrixNear;
-
-Eigen::Vector3d RandomUnitVector() {
-  return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
-      .normalized();
-}
+using test::ProjectiveDistance;
+using test::RandomUnitVector;
 
 // A relative pose with a rotation of up to ~0.5 rad and a unit baseline.
-Rigid3d RandomRelativePose() {
-  const Eigen::Quaterniond rotation(
-      Eigen::AngleAxisd(RandomUniformReal(0.05, 0.5), RandomUnitVector()));
-  return Rigid3d(rotation, RandomUnitVector());
-}
+Rigid3d RandomRelativePose() { return test::RandomRelativePose(0.05, 0.5); }
 
 // Points in front of both cameras (cam1 frame, depths 3..8).
 std::vector<Eigen::Vector3d> RandomPointsInFront(const Rigid3d& cam2_from_cam1, int count) {
@@ -36,19 +31,6 @@ std::vector<Eigen::Vector3d> RandomPointsInFront(const Rigid3d& cam2_from_cam1, 
     if ((cam2_from_cam1 * point).z() > 0.5) points.push_back(point);
   }
   return points;
-}
-
-// Compares matrices up to scale and sign, relative to their norms.
-double ProjectiveDistance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const Eigen::Matrix3d a_unit = a / a.norm();
-  const Eigen::Matrix3d b_unit = b / b.norm();
-  return std::min((a_unit - b_unit).norm(), (a_unit + b_unit).norm());
-}
-
-Eigen::Matrix3d CalibrationMatrix(double focal, double cx, double cy) {
-  Eigen::Matrix3d K;
-  K << focal, 0, cx, 0, focal, cy, 0, 0, 1;
-  return K;
 }
 
 TEST(EssentialMatrix, FromPoseSatisfiesEpipolarConstraint) {

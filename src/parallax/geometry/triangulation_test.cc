@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "parallax/geometry/rigid3.h"
+#include "parallax/geometry/testing/random_geometry.h"
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
 
@@ -16,11 +17,7 @@ namespace parallax {
 namespace {
 
 using test::EigenMatrixNear;
-
-Eigen::Vector3d RandomUnitVector() {
-  return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
-      .normalized();
-}
+using test::RandomUnitVector;
 
 // A camera at `distance` from the origin in a random direction, looking at the origin.
 Rigid3d RandomCameraLookingAtOrigin(double distance) {

@@ -4,19 +4,14 @@
 
 #include <limits>
 
+#include "parallax/geometry/testing/random_geometry.h"
 #include "parallax/math/random.h"
 
 namespace parallax {
 namespace {
 
-Rigid3d RandomCamFromWorld() {
-  const Eigen::Vector3d axis(RandomUniformReal(-1, 1), RandomUniformReal(-1, 1),
-                             RandomUniformReal(-1, 1));
-  return Rigid3d(
-      Eigen::Quaterniond(Eigen::AngleAxisd(RandomUniformReal(-M_PI, M_PI), axis.normalized())),
-      Eigen::Vector3d(RandomUniformReal(-5, 5), RandomUniformReal(-5, 5),
-                      RandomUniformReal(-5, 5)));
-}
+// A camera anywhere within 5 of the origin, turned any way.
+Rigid3d RandomCamFromWorld() { return test::RandomCamFromWorld(5); }
 
 struct Scene {
   Rigid3d cam_from_world;

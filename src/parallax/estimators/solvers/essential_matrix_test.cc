@@ -7,6 +7,7 @@
 #include <iostream>
 #include <limits>
 
+#include "parallax/estimators/testing/two_view_scene.h"
 #include "parallax/geometry/essential_matrix.h"
 #include "parallax/math/random.h"
 #include "parallax/optim/ransac.h"
@@ -14,60 +15,32 @@
 namespace parallax {
 namespace {
 
-constexpr double kFocal = 1000, kWidth = 1024, kHeight = 768;
+using test::Head;
+using test::kImageHeight;
+using test::kImageWidth;
+using test::ProjectiveDistance;
+using test::RandomImagePoint;
+using test::RandomUnitVector;
+using test::TwoViewScene;
 
-Eigen::Vector3d RandomUnitVector() {
-  return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
-      .normalized();
-}
+constexpr double kFocal = 1000;
 
-// Normalised coordinates of random points seen by two cameras (focal 1000, 1024 x 768 images).
-struct Scene {
-  Rigid3d cam2_from_cam1;
-  std::vector<Eigen::Vector3d> points3D;
-  std::vector<Eigen::Vector2d> points1, points2;
-};
-
-Scene RandomScene(int num_points, double max_rotation = 0.3) {
-  Scene scene;
-  scene.cam2_from_cam1 = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(
-                                     RandomUniformReal(0.0, max_rotation), RandomUnitVector())),
-                                 RandomUnitVector());
-  while (static_cast<int>(scene.points3D.size()) < num_points) {
-    const Eigen::Vector3d point =
-        RandomUniformReal(4, 10) * Eigen::Vector3d(RandomUniformReal(-0.5, 0.5) * kWidth / kFocal,
-                                                   RandomUniformReal(-0.5, 0.5) * kHeight / kFocal,
-                                                   1);
-    const Eigen::Vector3d in_cam2 = scene.cam2_from_cam1 * point;
-    if (in_cam2.z() < 0.5) continue;
-    const Eigen::Vector2d point2 = in_cam2.hnormalized();
-    if (std::abs(point2.x()) > 0.5 * kWidth / kFocal ||
-        std::abs(point2.y()) > 0.5 * kHeight / kFocal) {
-      continue;
-    }
-    scene.points3D.push_back(point);
-    scene.points1.push_back(point.hnormalized());
-    scene.points2.push_back(point2);
-  }
-  return scene;
-}
-
-double ProjectiveDistance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const Eigen::Matrix3d a_unit = a / a.norm();
-  const Eigen::Matrix3d b_unit = b / b.norm();
-  return std::min((a_unit - b_unit).norm(), (a_unit + b_unit).norm());
-}
-
-std::vector<Eigen::Vector2d> Head(const std::vector<Eigen::Vector2d>& points, size_t count) {
-  return std::vector<Eigen::Vector2d>(points.begin(), points.begin() + count);
+// Random points seen by two cameras of focal length kFocal (1024 x 768 images), a rotation of
+// up to 0.3 rad between them; the solvers take their normalised coordinates (normalized1,
+// normalized2).
+TwoViewScene RandomScene(int num_points) {
+  test::TwoViewSceneOptions options;
+  options.focal1 = options.focal2 = kFocal;
+  options.min_rotation = 0.0;
+  return test::RandomTwoViewScene(num_points, options);
 }
 
 TEST(EssentialMatrixFivePoint, OneSolutionIsExact) {
   for (int trial = 0; trial < 100; ++trial) {
-    const Scene scene = RandomScene(5);
+    const TwoViewScene scene = RandomScene(5);
     const Eigen::Matrix3d E_true = EssentialFromPose(scene.cam2_from_cam1);
     std::vector<Eigen::Matrix3d> models;
-    EstimateEssentialMatrixFivePoint(scene.points1, scene.points2, &models);
+    EstimateEssentialMatrixFivePoint(scene.normalized1, scene.normalized2, &models);
     ASSERT_FALSE(models.empty());
     ASSERT_LE(models.size(), 10u);
     double best = std::numeric_limits<double>::max();
@@ -78,7 +51,7 @@ TEST(EssentialMatrixFivePoint, OneSolutionIsExact) {
       EXPECT_NEAR(singular_values(0), singular_values(1), 1e-6);
       EXPECT_LT(singular_values(2), 1e-6);
       for (int i = 0; i < 5; ++i) {
-        EXPECT_LT(ComputeSquaredSampsonError(scene.points1[i], scene.points2[i], E), 1e-14);
+        EXPECT_LT(ComputeSquaredSampsonError(scene.normalized1[i], scene.normalized2[i], E), 1e-14);
       }
     }
     EXPECT_LT(best, 1e-8) << "trial " << trial;
@@ -87,28 +60,24 @@ TEST(EssentialMatrixFivePoint, OneSolutionIsExact) {
 
 TEST(EssentialMatrixFivePoint, LeastSquaresAndPlanarScenes) {
   // More than five points: the least-squares null space still contains E.
-  const Scene scene = RandomScene(30);
+  const TwoViewScene scene = RandomScene(30);
   std::vector<Eigen::Matrix3d> models;
-  EstimateEssentialMatrixFivePoint(scene.points1, scene.points2, &models);
+  EstimateEssentialMatrixFivePoint(scene.normalized1, scene.normalized2, &models);
   double best = std::numeric_limits<double>::max();
   for (const Eigen::Matrix3d& E : models) {
     best = std::min(best, ProjectiveDistance(E, EssentialFromPose(scene.cam2_from_cam1)));
   }
   EXPECT_LT(best, 1e-8);
   // Coplanar points are not degenerate for the 5-point algorithm (Nistér 2004, sec. 1).
-  Scene plane;
+  TwoViewScene plane = RandomScene(0);
   plane.cam2_from_cam1 = scene.cam2_from_cam1;
   const Eigen::Vector3d normal =
       (Eigen::Vector3d(0, 0, -1) + 0.3 * RandomUnitVector()).normalized();
-  while (plane.points1.size() < 5) {
-    const Eigen::Vector3d ray(RandomUniformReal(-0.4, 0.4), RandomUniformReal(-0.3, 0.3), 1);
-    const Eigen::Vector3d point = ray * normal.dot(Eigen::Vector3d(0, 0, 6)) / normal.dot(ray);
-    const Eigen::Vector3d in_cam2 = plane.cam2_from_cam1 * point;
-    if (in_cam2.z() < 0.5) continue;
-    plane.points1.push_back(point.hnormalized());
-    plane.points2.push_back(in_cam2.hnormalized());
+  while (plane.points3D.size() < 5) {
+    const Eigen::Vector3d ray = plane.K1.inverse() * RandomImagePoint().homogeneous();
+    plane.Add(ray * normal.dot(Eigen::Vector3d(0, 0, 6)) / normal.dot(ray));
   }
-  EstimateEssentialMatrixFivePoint(plane.points1, plane.points2, &models);
+  EstimateEssentialMatrixFivePoint(plane.normalized1, plane.normalized2, &models);
   best = std::numeric_limits<double>::max();
   for (const Eigen::Matrix3d& E : models) {
     best = std::min(best, ProjectiveDistance(E, EssentialFromPose(plane.cam2_from_cam1)));
@@ -118,11 +87,11 @@ TEST(EssentialMatrixFivePoint, LeastSquaresAndPlanarScenes) {
 
 TEST(EssentialMatrixEightPoint, RecoversExactModel) {
   for (int trial = 0; trial < 20; ++trial) {
-    const Scene scene = RandomScene(50);
+    const TwoViewScene scene = RandomScene(50);
     std::vector<Eigen::Matrix3d> models;
     for (size_t count : {size_t{8}, size_t{50}}) {
-      EstimateEssentialMatrixEightPoint(Head(scene.points1, count), Head(scene.points2, count),
-                                        &models);
+      EstimateEssentialMatrixEightPoint(Head(scene.normalized1, count),
+                                        Head(scene.normalized2, count), &models);
       ASSERT_EQ(models.size(), 1u);
       EXPECT_LT(ProjectiveDistance(models[0], EssentialFromPose(scene.cam2_from_cam1)), 1e-8);
       const Eigen::Vector3d singular_values =
@@ -134,23 +103,24 @@ TEST(EssentialMatrixEightPoint, RecoversExactModel) {
 }
 
 TEST(EssentialMatrix, RefusesDegenerateInput) {
-  const Scene scene = RandomScene(10);
+  const TwoViewScene scene = RandomScene(10);
   std::vector<Eigen::Matrix3d> models = {Eigen::Matrix3d::Identity()};
-  EstimateEssentialMatrixFivePoint(Head(scene.points1, 4), Head(scene.points2, 4), &models);
+  EstimateEssentialMatrixFivePoint(Head(scene.normalized1, 4), Head(scene.normalized2, 4), &models);
   EXPECT_TRUE(models.empty());
-  EstimateEssentialMatrixEightPoint(Head(scene.points1, 7), Head(scene.points2, 7), &models);
+  EstimateEssentialMatrixEightPoint(Head(scene.normalized1, 7), Head(scene.normalized2, 7),
+                                    &models);
   EXPECT_TRUE(models.empty());
-  std::vector<Eigen::Vector2d> bad = Head(scene.points1, 8);
+  std::vector<Eigen::Vector2d> bad = Head(scene.normalized1, 8);
   bad[2].y() = std::numeric_limits<double>::quiet_NaN();
-  EstimateEssentialMatrixFivePoint(Head(bad, 5), Head(scene.points2, 5), &models);
+  EstimateEssentialMatrixFivePoint(Head(bad, 5), Head(scene.normalized2, 5), &models);
   EXPECT_TRUE(models.empty());
-  EstimateEssentialMatrixFivePoint(bad, Head(scene.points2, 8), &models);
+  EstimateEssentialMatrixFivePoint(bad, Head(scene.normalized2, 8), &models);
   EXPECT_TRUE(models.empty());
   bad[2].y() = -std::numeric_limits<double>::infinity();
-  EstimateEssentialMatrixEightPoint(bad, Head(scene.points2, 8), &models);
+  EstimateEssentialMatrixEightPoint(bad, Head(scene.normalized2, 8), &models);
   EXPECT_TRUE(models.empty());
   // The same correspondence five times, and points on one 3D line.
-  const std::vector<Eigen::Vector2d> same1(5, scene.points1[0]), same2(5, scene.points2[0]);
+  const std::vector<Eigen::Vector2d> same1(5, scene.normalized1[0]), same2(5, scene.normalized2[0]);
   EstimateEssentialMatrixFivePoint(same1, same2, &models);
   EXPECT_TRUE(models.empty());
   std::vector<Eigen::Vector2d> line1, line2;
@@ -168,24 +138,25 @@ TEST(EssentialMatrix, RefusesDegenerateInput) {
 
 TEST(EssentialMatrixLoRansac, NoiseAndFortyPercentOutliers) {
   for (int trial = 0; trial < 3; ++trial) {
-    Scene scene = RandomScene(1000);
+    TwoViewScene scene = RandomScene(1000);
     const double noise = 0.5 / kFocal;
-    std::vector<char> is_inlier(scene.points1.size());
-    for (size_t i = 0; i < scene.points1.size(); ++i) {
+    std::vector<char> is_inlier(scene.normalized1.size());
+    for (size_t i = 0; i < scene.normalized1.size(); ++i) {
       is_inlier[i] = i % 5 >= 2;
-      scene.points1[i] += Eigen::Vector2d(RandomGaussian(0, noise), RandomGaussian(0, noise));
+      scene.normalized1[i] += Eigen::Vector2d(RandomGaussian(0, noise), RandomGaussian(0, noise));
       if (is_inlier[i]) {
-        scene.points2[i] += Eigen::Vector2d(RandomGaussian(0, noise), RandomGaussian(0, noise));
+        scene.normalized2[i] += Eigen::Vector2d(RandomGaussian(0, noise), RandomGaussian(0, noise));
       } else {
-        scene.points2[i] = Eigen::Vector2d(RandomUniformReal(-0.5, 0.5) * kWidth / kFocal,
-                                           RandomUniformReal(-0.5, 0.5) * kHeight / kFocal);
+        scene.normalized2[i] =
+            Eigen::Vector2d(RandomUniformReal(-0.5, 0.5) * kImageWidth / kFocal,
+                            RandomUniformReal(-0.5, 0.5) * kImageHeight / kFocal);
       }
     }
     RansacOptions options;
     options.max_error = 1.5 / kFocal;  // 3 sigma of the 0.5 px noise.
     const LoRansac<EssentialMatrixFivePointEstimator, EssentialMatrixEightPointEstimator> ransac(
         options);
-    const auto report = ransac.Estimate(scene.points1, scene.points2);
+    const auto report = ransac.Estimate(scene.normalized1, scene.normalized2);
     ASSERT_TRUE(report.success);
     size_t inliers_kept = 0, outliers_kept = 0, num_true_inliers = 0;
     for (size_t i = 0; i < is_inlier.size(); ++i) {
@@ -195,14 +166,16 @@ TEST(EssentialMatrixLoRansac, NoiseAndFortyPercentOutliers) {
     std::cerr << "kept " << inliers_kept << "/" << num_true_inliers << " inliers, " << outliers_kept
               << "/" << is_inlier.size() - num_true_inliers << " outliers\n";
     EXPECT_GE(inliers_kept, 0.95 * num_true_inliers);
-    EXPECT_LE(outliers_kept, 0.01 * (inliers_kept + outliers_kept));
+    // About 1 % of uniform outliers fall within 1.5 px of their epipolar line and cannot be
+    // rejected; the count is Poisson (4 expected of 400), so allow two and a half times that.
+    EXPECT_LE(outliers_kept, 0.025 * (is_inlier.size() - num_true_inliers));
     // The relative pose from the model is within a fraction of a degree of the truth.
     Rigid3d estimated;
     std::vector<Eigen::Vector2d> inliers1, inliers2;
     for (size_t i = 0; i < is_inlier.size(); ++i) {
       if (report.inlier_mask[i]) {
-        inliers1.push_back(scene.points1[i]);
-        inliers2.push_back(scene.points2[i]);
+        inliers1.push_back(scene.normalized1[i]);
+        inliers2.push_back(scene.normalized2[i]);
       }
     }
     ASSERT_TRUE(PoseFromEssentialMatrix(report.model, inliers1, inliers2, &estimated));

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <limits>
 
+#include "parallax/estimators/testing/two_view_scene.h"
 #include "parallax/geometry/essential_matrix.h"
 #include "parallax/math/random.h"
 #include "parallax/optim/ransac.h"
@@ -14,65 +15,12 @@
 namespace parallax {
 namespace {
 
-constexpr double kWidth = 1024, kHeight = 768;
-
-Eigen::Matrix3d CalibrationMatrix(double focal) {
-  Eigen::Matrix3d K;
-  K << focal, 0, kWidth / 2, 0, focal, kHeight / 2, 0, 0, 1;
-  return K;
-}
-
-Eigen::Vector3d RandomUnitVector() {
-  return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
-      .normalized();
-}
-
-// Two cameras with known K, exact pixel projections of random 3D points seen by both.
-struct Scene {
-  Eigen::Matrix3d K1 = CalibrationMatrix(1000);
-  Eigen::Matrix3d K2 = CalibrationMatrix(1200);
-  Rigid3d cam2_from_cam1;
-  std::vector<Eigen::Vector3d> points3D;  // In cam1.
-  std::vector<Eigen::Vector2d> points1, points2;
-
-  Eigen::Matrix3d TrueF() const {
-    return FundamentalFromEssential(EssentialFromPose(cam2_from_cam1), K1, K2);
-  }
-  bool Add(const Eigen::Vector3d& point) {
-    const Eigen::Vector3d in_cam2 = cam2_from_cam1 * point;
-    if (point.z() < 0.5 || in_cam2.z() < 0.5) return false;
-    const Eigen::Vector2d pixel2 = (K2 * in_cam2).hnormalized();
-    if (pixel2.x() < 0 || pixel2.x() > kWidth || pixel2.y() < 0 || pixel2.y() > kHeight) {
-      return false;
-    }
-    points3D.push_back(point);
-    points1.push_back((K1 * point).hnormalized());
-    points2.push_back(pixel2);
-    return true;
-  }
-};
-
-Scene RandomScene(int num_points) {
-  Scene scene;
-  scene.cam2_from_cam1 = Rigid3d(
-      Eigen::Quaterniond(Eigen::AngleAxisd(RandomUniformReal(0.05, 0.3), RandomUnitVector())),
-      RandomUnitVector());
-  while (static_cast<int>(scene.points3D.size()) < num_points) {
-    const Eigen::Vector2d pixel(RandomUniformReal(0, kWidth), RandomUniformReal(0, kHeight));
-    scene.Add(RandomUniformReal(4, 10) * scene.K1.inverse() * pixel.homogeneous());
-  }
-  return scene;
-}
-
-double ProjectiveDistance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const Eigen::Matrix3d a_unit = a / a.norm();
-  const Eigen::Matrix3d b_unit = b / b.norm();
-  return std::min((a_unit - b_unit).norm(), (a_unit + b_unit).norm());
-}
-
-std::vector<Eigen::Vector2d> Head(const std::vector<Eigen::Vector2d>& points, size_t count) {
-  return std::vector<Eigen::Vector2d>(points.begin(), points.begin() + count);
-}
+using test::Head;
+using test::ProjectiveDistance;
+using test::RandomImagePoint;
+using test::RandomTwoViewScene;
+using test::RandomUnitVector;
+using test::TwoViewScene;
 
 TEST(HartleyNormalization, CentresAndScales) {
   const std::vector<Eigen::Vector2d> points = {{100, 200}, {300, 200}, {200, 400}, {200, 0}};
@@ -95,7 +43,7 @@ TEST(HartleyNormalization, CentresAndScales) {
 
 TEST(FundamentalMatrixEightPoint, RecoversExactModel) {
   for (int trial = 0; trial < 20; ++trial) {
-    const Scene scene = RandomScene(100);
+    const TwoViewScene scene = RandomTwoViewScene(100);
     std::vector<Eigen::Matrix3d> models;
     for (size_t count : {size_t{8}, size_t{9}, size_t{100}}) {
       EstimateFundamentalMatrixEightPoint(Head(scene.points1, count), Head(scene.points2, count),
@@ -110,7 +58,7 @@ TEST(FundamentalMatrixEightPoint, RecoversExactModel) {
 
 TEST(FundamentalMatrixSevenPoint, OneSolutionIsExact) {
   for (int trial = 0; trial < 50; ++trial) {
-    const Scene scene = RandomScene(7);
+    const TwoViewScene scene = RandomTwoViewScene(7);
     std::vector<Eigen::Matrix3d> models;
     EstimateFundamentalMatrixSevenPoint(scene.points1, scene.points2, &models);
     ASSERT_TRUE(models.size() == 1 || models.size() == 3) << models.size();
@@ -128,7 +76,7 @@ TEST(FundamentalMatrixSevenPoint, OneSolutionIsExact) {
 }
 
 TEST(FundamentalMatrix, RefusesDegenerateInput) {
-  const Scene scene = RandomScene(20);
+  const TwoViewScene scene = RandomTwoViewScene(20);
   std::vector<Eigen::Matrix3d> models = {Eigen::Matrix3d::Identity()};
   // Too few points.
   EstimateFundamentalMatrixSevenPoint(Head(scene.points1, 6), Head(scene.points2, 6), &models);
@@ -154,25 +102,21 @@ TEST(FundamentalMatrix, RefusesDegenerateInput) {
 TEST(FundamentalMatrix, RefusesCollinearAndCoplanarPoints) {
   for (int trial = 0; trial < 10; ++trial) {
     // 3D points on one line: collinear in both images.
-    Scene line;
-    line.cam2_from_cam1 = RandomScene(1).cam2_from_cam1;
+    TwoViewScene line = test::EmptyTwoViewScene();
+    TwoViewScene plane = line;  // The same cameras, no points yet.
     const Eigen::Vector3d origin(0, 0, 6), direction = RandomUnitVector();
     while (line.points3D.size() < 20) {
       line.Add(origin + RandomUniformReal(-2, 2) * direction);
     }
     // 3D points on one plane: F is a 3-parameter family (plus a homography).
-    Scene plane;
-    plane.cam2_from_cam1 = line.cam2_from_cam1;
     const Eigen::Vector3d normal =
         (Eigen::Vector3d(0, 0, -1) + 0.3 * RandomUnitVector()).normalized();
     while (plane.points3D.size() < 20) {
-      const Eigen::Vector3d ray =
-          plane.K1.inverse() *
-          Eigen::Vector3d(RandomUniformReal(0, kWidth), RandomUniformReal(0, kHeight), 1);
+      const Eigen::Vector3d ray = plane.K1.inverse() * RandomImagePoint().homogeneous();
       // Plane through (0, 0, 6): normal . X = normal . (0, 0, 6).
       plane.Add(ray * normal.dot(origin) / normal.dot(ray));
     }
-    for (const Scene* scene : {&line, &plane}) {
+    for (const TwoViewScene* scene : {&line, &plane}) {
       std::vector<Eigen::Matrix3d> models;
       EstimateFundamentalMatrixSevenPoint(Head(scene->points1, 7), Head(scene->points2, 7),
                                           &models);
@@ -190,7 +134,7 @@ TEST(FundamentalMatrix, RefusesCollinearAndCoplanarPoints) {
 
 TEST(FundamentalMatrixLoRansac, NoiseAndFortyPercentOutliers) {
   for (int trial = 0; trial < 3; ++trial) {
-    Scene scene = RandomScene(1000);
+    TwoViewScene scene = RandomTwoViewScene(1000);
     std::vector<char> is_inlier(scene.points1.size());
     for (size_t i = 0; i < scene.points1.size(); ++i) {
       is_inlier[i] = i % 5 >= 2;  // 40 % outliers.
@@ -198,8 +142,7 @@ TEST(FundamentalMatrixLoRansac, NoiseAndFortyPercentOutliers) {
       if (is_inlier[i]) {
         scene.points2[i] += Eigen::Vector2d(RandomGaussian(0, 0.5), RandomGaussian(0, 0.5));
       } else {
-        scene.points2[i] =
-            Eigen::Vector2d(RandomUniformReal(0, kWidth), RandomUniformReal(0, kHeight));
+        scene.points2[i] = RandomImagePoint();
       }
     }
     RansacOptions options;
@@ -218,7 +161,7 @@ TEST(FundamentalMatrixLoRansac, NoiseAndFortyPercentOutliers) {
     EXPECT_GE(inliers_kept, 0.95 * num_true_inliers);
     EXPECT_LE(outliers_kept, 0.01 * (inliers_kept + outliers_kept));
     // The model explains the exact projections to well under a pixel.
-    const Scene& truth = scene;
+    const TwoViewScene& truth = scene;
     double squared_error = 0;
     for (size_t i = 0; i < truth.points3D.size(); ++i) {
       const Eigen::Vector2d exact1 = (truth.K1 * truth.points3D[i]).hnormalized();

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <limits>
 
+#include "parallax/estimators/testing/two_view_scene.h"
 #include "parallax/geometry/rigid3.h"
 #include "parallax/math/random.h"
 #include "parallax/optim/ransac.h"
@@ -14,69 +15,23 @@
 namespace parallax {
 namespace {
 
-constexpr double kWidth = 1024, kHeight = 768;
+using test::Head;
+using test::kImageHeight;
+using test::kImageWidth;
+using test::ProjectiveDistance;
+using test::RandomImagePoint;
+using test::TwoViewScene;
 
-Eigen::Matrix3d CalibrationMatrix(double focal) {
-  Eigen::Matrix3d K;
-  K << focal, 0, kWidth / 2, 0, focal, kHeight / 2, 0, 0, 1;
-  return K;
-}
-
-Eigen::Vector3d RandomUnitVector() {
-  return Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1), RandomGaussian(0, 1))
-      .normalized();
-}
-
-// Random points of a plane seen by two cameras; H = K2 (R + t n^T / d) K1^-1.
-struct PlaneScene {
-  Eigen::Matrix3d K1 = CalibrationMatrix(1000);
-  Eigen::Matrix3d K2 = CalibrationMatrix(900);
-  Rigid3d cam2_from_cam1;
-  Eigen::Vector3d normal;  // n . X = distance for plane points X in cam1.
-  double distance = 6;
-  std::vector<Eigen::Vector2d> points1, points2;
-
-  Eigen::Matrix3d TrueH() const {
-    return K2 *
-           (cam2_from_cam1.rotation.toRotationMatrix() +
-            cam2_from_cam1.translation * normal.transpose() / distance) *
-           K1.inverse();
-  }
-};
-
-PlaneScene RandomPlaneScene(int num_points) {
-  PlaneScene scene;
-  scene.cam2_from_cam1 = Rigid3d(
-      Eigen::Quaterniond(Eigen::AngleAxisd(RandomUniformReal(0.05, 0.3), RandomUnitVector())),
-      RandomUnitVector());
-  scene.normal = (Eigen::Vector3d(0, 0, 1) + 0.4 * RandomUnitVector()).normalized();
-  while (static_cast<int>(scene.points1.size()) < num_points) {
-    const Eigen::Vector2d pixel1(RandomUniformReal(0, kWidth), RandomUniformReal(0, kHeight));
-    const Eigen::Vector3d ray = scene.K1.inverse() * pixel1.homogeneous();
-    const Eigen::Vector3d point = ray * scene.distance / scene.normal.dot(ray);
-    const Eigen::Vector3d in_cam2 = scene.cam2_from_cam1 * point;
-    if (point.z() < 0.5 || in_cam2.z() < 0.5) continue;
-    const Eigen::Vector2d pixel2 = (scene.K2 * in_cam2).hnormalized();
-    if (pixel2.x() < 0 || pixel2.x() > kWidth || pixel2.y() < 0 || pixel2.y() > kHeight) continue;
-    scene.points1.push_back(pixel1);
-    scene.points2.push_back(pixel2);
-  }
-  return scene;
-}
-
-double ProjectiveDistance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const Eigen::Matrix3d a_unit = a / a.norm();
-  const Eigen::Matrix3d b_unit = b / b.norm();
-  return std::min((a_unit - b_unit).norm(), (a_unit + b_unit).norm());
-}
-
-std::vector<Eigen::Vector2d> Head(const std::vector<Eigen::Vector2d>& points, size_t count) {
-  return std::vector<Eigen::Vector2d>(points.begin(), points.begin() + count);
+// Random points of a plane seen by two cameras (focal lengths 1000 and 900 px).
+TwoViewScene RandomPlaneScene(int num_points) {
+  test::TwoViewSceneOptions options;
+  options.focal2 = 900;
+  return test::RandomPlanarTwoViewScene(num_points, options);
 }
 
 TEST(HomographyMatrix, RecoversExactModel) {
   for (int trial = 0; trial < 20; ++trial) {
-    const PlaneScene scene = RandomPlaneScene(100);
+    const TwoViewScene scene = RandomPlaneScene(100);
     std::vector<Eigen::Matrix3d> models;
     for (size_t count : {size_t{4}, size_t{5}, size_t{100}}) {
       EstimateHomographyMatrix(Head(scene.points1, count), Head(scene.points2, count), &models);
@@ -88,7 +43,7 @@ TEST(HomographyMatrix, RecoversExactModel) {
 }
 
 TEST(HomographyMatrix, RefusesDegenerateInput) {
-  const PlaneScene scene = RandomPlaneScene(10);
+  const TwoViewScene scene = RandomPlaneScene(10);
   std::vector<Eigen::Matrix3d> models = {Eigen::Matrix3d::Identity()};
   EstimateHomographyMatrix(Head(scene.points1, 3), Head(scene.points2, 3), &models);
   EXPECT_TRUE(models.empty());
@@ -144,7 +99,7 @@ TEST(HomographyMatrix, RefusesSamplesThatFoldThePlane) {
 
 TEST(HomographyLoRansac, NoiseAndFortyPercentOutliers) {
   for (int trial = 0; trial < 3; ++trial) {
-    PlaneScene scene = RandomPlaneScene(1000);
+    TwoViewScene scene = RandomPlaneScene(1000);
     std::vector<char> is_inlier(scene.points1.size());
     for (size_t i = 0; i < scene.points1.size(); ++i) {
       is_inlier[i] = i % 5 >= 2;
@@ -152,8 +107,7 @@ TEST(HomographyLoRansac, NoiseAndFortyPercentOutliers) {
       if (is_inlier[i]) {
         scene.points2[i] += Eigen::Vector2d(RandomGaussian(0, 0.5), RandomGaussian(0, 0.5));
       } else {
-        scene.points2[i] =
-            Eigen::Vector2d(RandomUniformReal(0, kWidth), RandomUniformReal(0, kHeight));
+        scene.points2[i] = RandomImagePoint();
       }
     }
     RansacOptions options;
@@ -171,7 +125,7 @@ TEST(HomographyLoRansac, NoiseAndFortyPercentOutliers) {
     EXPECT_GE(inliers_kept, 0.95 * num_true_inliers);
     EXPECT_LE(outliers_kept, 0.01 * (inliers_kept + outliers_kept));
     // Transfer of the image centre within a pixel of the truth.
-    const Eigen::Vector3d centre(kWidth / 2, kHeight / 2, 1);
+    const Eigen::Vector3d centre(kImageWidth / 2, kImageHeight / 2, 1);
     EXPECT_LT(
         ((report.model * centre).hnormalized() - (scene.TrueH() * centre).hnormalized()).norm(),
         1.0);

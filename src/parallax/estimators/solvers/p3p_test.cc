@@ -6,6 +6,7 @@
 
 #include <limits>
 
+#include "parallax/geometry/testing/random_geometry.h"
 #include "parallax/math/random.h"
 
 namespace parallax {
@@ -13,14 +14,8 @@ namespace {
 
 using test::EigenMatrixNear;
 
-Rigid3d RandomCamFromWorld() {
-  const Eigen::Vector3d axis(RandomUniformReal(-1, 1), RandomUniformReal(-1, 1),
-                             RandomUniformReal(-1, 1));
-  return Rigid3d(
-      Eigen::Quaterniond(Eigen::AngleAxisd(RandomUniformReal(-M_PI, M_PI), axis.normalized())),
-      Eigen::Vector3d(RandomUniformReal(-5, 5), RandomUniformReal(-5, 5),
-                      RandomUniformReal(-5, 5)));
-}
+// A camera anywhere within 5 of the origin, turned any way.
+Rigid3d RandomCamFromWorld() { return test::RandomCamFromWorld(5); }
 
 // A world point seen by the camera at normalised coordinates within +-0.6 and depth 2 to 10.
 Eigen::Vector3d RandomVisiblePoint(const Rigid3d& cam_from_world) {
