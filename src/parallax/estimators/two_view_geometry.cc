@@ -203,6 +203,108 @@ bool PoseFromCalibratedHomography(const Eigen::Matrix3d& H_calibrated,
   return cam2_from_cam1->rotation.coeffs().allFinite() && cam2_from_cam1->translation.allFinite();
 }
 
+// The pair's RANSAC options for one model's search: `max_error` in that model's unit, and
+// min_inlier_ratio raised to the ratio of `num_inliers_sought`, the fewest inliers that
+// would change the outcome. RANSAC turns it into its bound on trials: the chance matches of a
+// non-overlapping pair are few (15-35 on templeRing), which makes this a few dozen to a few
+// hundred trials instead of the cap.
+RansacOptions BoundedRansacOptions(const TwoViewGeometryOptions& options, double max_error,
+                                   RansacStream stream, double num_inliers_sought,
+                                   size_t num_correspondences) {
+  RansacOptions ransac_options = StreamRansacOptions(options, max_error, stream);
+  ransac_options.min_inlier_ratio =
+      std::clamp(num_inliers_sought / static_cast<double>(num_correspondences),
+                 options.ransac.min_inlier_ratio, 1.0);
+  return ransac_options;
+}
+
+// The seed of the significance test's chance pairs, shared by E's search and the final test so
+// that both measure the same chance rate.
+uint64_t ChanceSeed(const TwoViewGeometryOptions& options) {
+  return DeriveSeed(options.ransac.random_seed, 0);
+}
+
+double Ratio(size_t numerator, size_t denominator) {
+  return denominator == 0 ? std::numeric_limits<double>::infinity()
+                          : static_cast<double>(numerator) / static_cast<double>(denominator);
+}
+
+// Whether the kept model's inliers say nothing: along one line (or on one point) they satisfy
+// every model of the family, one keypoint matched many times (no cross-check) is one
+// observation, not many, and RANSAC always finds some model that explains a few chance
+// matches, more the more matches there are: the pair is kept only when so many inliers would
+// be unexpected (max_num_false_alarms).
+bool AreDegenerateOrChance(const TwoViewCorrespondences& correspondences,
+                           const CalibratedTwoViewModel& E, const TwoViewModelReport& F_report,
+                           const TwoViewModelReport& H_report, const TwoViewDecision& decision,
+                           const TwoViewGeometryOptions& options) {
+  const std::vector<char>& inlier_mask =
+      decision.model == TwoViewModelKind::kEssential     ? E.report.inlier_mask
+      : decision.model == TwoViewModelKind::kFundamental ? F_report.inlier_mask
+                                                         : H_report.inlier_mask;
+  const double max_error_px = options.ransac.max_error;
+  if (AreNearlyCollinear(correspondences.points1, inlier_mask, max_error_px) ||
+      AreNearlyCollinear(correspondences.points2, inlier_mask, max_error_px) ||
+      CountDistinctKeypoints(correspondences.matches, inlier_mask) <
+          MinNumTwoViewInliers(options)) {
+    PARALLAX_LOG(Debug) << "Two-view inliers are collinear or repeated: degenerate pair";
+    return true;
+  }
+  const uint64_t chance_seed = ChanceSeed(options);
+  double log10_num_false_alarms = 0.0;
+  if (decision.model == TwoViewModelKind::kEssential) {
+    log10_num_false_alarms =
+        Log10NumFalseAlarms(EssentialMatrixFivePointEstimator(), E.normalized1, E.normalized2,
+                            E.report.model, E.max_error, decision.num_inliers, chance_seed);
+  } else if (decision.model == TwoViewModelKind::kFundamental) {
+    log10_num_false_alarms = Log10NumFalseAlarms(
+        FundamentalMatrixSevenPointEstimator(), correspondences.points1, correspondences.points2,
+        F_report.model, max_error_px, decision.num_inliers, chance_seed);
+  } else {
+    log10_num_false_alarms = Log10NumFalseAlarms(
+        HomographyMatrixEstimator(), correspondences.points1, correspondences.points2,
+        H_report.model, max_error_px, decision.num_inliers, chance_seed);
+  }
+  if (log10_num_false_alarms > std::log10(options.max_num_false_alarms)) {
+    PARALLAX_LOG(Debug) << "Two-view inliers (" << decision.num_inliers << " of "
+                        << correspondences.size() << ") could be chance: 10^"
+                        << log10_num_false_alarms << " false alarms expected; degenerate pair";
+    return true;
+  }
+  return false;
+}
+
+// In a plane or a pure rotation F (and E for a rotation) is a family, and RANSAC settles on
+// the member that also collects the most outliers. H is the model there: a panoramic pair
+// keeps H's inliers; a planar pair keeps H's inliers plus the matches of `inlier_mask` that
+// also fit the epipolar geometry of the pose from H (points off the plane).
+FeatureMatches PlanarInlierMatches(const Camera& camera1, const Camera& camera2,
+                                   const TwoViewCorrespondences& correspondences,
+                                   const TwoViewGeometry& geometry,
+                                   const std::vector<char>& inlier_mask,
+                                   const TwoViewModelReport& H_report,
+                                   const TwoViewGeometryOptions& options) {
+  std::vector<char> refined_mask = H_report.inlier_mask;
+  if (geometry.config != TwoViewGeometry::kPanoramic) {
+    const Eigen::Matrix3d F_pose =
+        FundamentalFromEssential(EssentialFromPose(geometry.cam2_from_cam1),
+                                 camera1.CalibrationMatrix(), camera2.CalibrationMatrix());
+    const double max_squared_error = options.ransac.max_error * options.ransac.max_error;
+    for (size_t i = 0; i < refined_mask.size(); ++i) {
+      if (!refined_mask[i] && inlier_mask[i] &&
+          ComputeSquaredSampsonError(correspondences.points1[i], correspondences.points2[i],
+                                     F_pose) <= max_squared_error) {
+        refined_mask[i] = 1;
+      }
+    }
+  }
+  FeatureMatches inlier_matches;
+  for (size_t i = 0; i < correspondences.size(); ++i) {
+    if (refined_mask[i]) inlier_matches.push_back(correspondences.matches[i]);
+  }
+  return inlier_matches;
+}
+
 }  // namespace
 
 void TwoViewGeometryOptions::Check() const {
@@ -214,6 +316,146 @@ void TwoViewGeometryOptions::Check() const {
   PARALLAX_CHECK_GT(max_num_false_alarms, 0.0);
 }
 
+TwoViewCorrespondences FiniteCorrespondences(const std::vector<Eigen::Vector2d>& points1,
+                                             const std::vector<Eigen::Vector2d>& points2,
+                                             const FeatureMatches& matches) {
+  TwoViewCorrespondences correspondences;
+  correspondences.matches.reserve(matches.size());
+  correspondences.points1.reserve(matches.size());
+  correspondences.points2.reserve(matches.size());
+  for (const FeatureMatch& match : matches) {
+    PARALLAX_CHECK_LT(match.point2D_idx1, points1.size());
+    PARALLAX_CHECK_LT(match.point2D_idx2, points2.size());
+    const Eigen::Vector2d& point1 = points1[match.point2D_idx1];
+    const Eigen::Vector2d& point2 = points2[match.point2D_idx2];
+    if (!point1.allFinite() || !point2.allFinite()) continue;
+    correspondences.matches.push_back(match);
+    correspondences.points1.push_back(point1);
+    correspondences.points2.push_back(point2);
+  }
+  return correspondences;
+}
+
+size_t MinNumTwoViewInliers(const TwoViewGeometryOptions& options) {
+  return std::max<size_t>(static_cast<size_t>(options.min_num_inliers), 1);
+}
+
+bool IsCalibratedPair(const Camera& camera1, const Camera& camera2,
+                      const TwoViewGeometryOptions& options) {
+  return options.use_essential_when_calibrated && camera1.has_prior_focal_length &&
+         camera2.has_prior_focal_length && camera1.VerifyParams() && camera2.VerifyParams();
+}
+
+CalibratedTwoViewModel EstimateCalibratedTwoViewModel(const Camera& camera1, const Camera& camera2,
+                                                      const TwoViewCorrespondences& correspondences,
+                                                      const TwoViewGeometryOptions& options) {
+  CalibratedTwoViewModel E;
+  const size_t num_correspondences = correspondences.size();
+  E.normalized1.resize(num_correspondences);
+  E.normalized2.resize(num_correspondences);
+  for (size_t i = 0; i < num_correspondences; ++i) {
+    E.normalized1[i] = camera1.CamFromImg(correspondences.points1[i]);
+    E.normalized2[i] = camera2.CamFromImg(correspondences.points2[i]);
+  }
+  const double max_error_px = options.ransac.max_error;
+  E.max_error =
+      0.5 * (camera1.CamFromImgThreshold(max_error_px) + camera2.CamFromImgThreshold(max_error_px));
+  // Only E's search stops at the significance test's count: a calibrated epipolar model's
+  // chance rate varies little from model to model, while F's seven degrees of freedom (and
+  // H's eight) let a chance model take in a cluster of keypoints, and bounding their searches
+  // by such a model's rate lost weak real pairs (16 true inliers of 30 matches).
+  const LoRansac<EssentialMatrixFivePointEstimator, EssentialMatrixEightPointEstimator> ransac(
+      BoundedRansacOptions(options, E.max_error, kEssentialStream,
+                           static_cast<double>(MinNumTwoViewInliers(options)),
+                           num_correspondences));
+  E.report = ransac.Estimate(E.normalized1, E.normalized2,
+                             SignificantInlierCount<EssentialMatrixFivePointEstimator>(
+                                 E.normalized1, E.normalized2, E.max_error, ChanceSeed(options),
+                                 std::log10(options.max_num_false_alarms)));
+  return E;
+}
+
+TwoViewModelReport EstimateUncalibratedTwoViewModel(const TwoViewCorrespondences& correspondences,
+                                                    size_t E_num_inliers,
+                                                    const TwoViewGeometryOptions& options) {
+  const size_t min_num_inliers = MinNumTwoViewInliers(options);
+  const double num_inliers_sought =
+      E_num_inliers >= min_num_inliers
+          ? static_cast<double>(E_num_inliers) / std::max(options.min_E_F_inlier_ratio, 1e-9)
+          : static_cast<double>(min_num_inliers);
+  const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator> ransac(
+      BoundedRansacOptions(options, options.ransac.max_error, kFundamentalStream,
+                           num_inliers_sought, correspondences.size()));
+  return ransac.Estimate(correspondences.points1, correspondences.points2);
+}
+
+EpipolarTwoViewModel ChooseEpipolarTwoViewModel(size_t E_num_inliers, size_t F_num_inliers,
+                                                const TwoViewGeometryOptions& options) {
+  const size_t min_num_inliers = MinNumTwoViewInliers(options);
+  if (E_num_inliers >= min_num_inliers &&
+      Ratio(E_num_inliers, F_num_inliers) >= options.min_E_F_inlier_ratio) {
+    return EpipolarTwoViewModel::kCalibrated;
+  }
+  if (F_num_inliers >= min_num_inliers) return EpipolarTwoViewModel::kUncalibrated;
+  return EpipolarTwoViewModel::kNone;
+}
+
+TwoViewModelReport EstimatePlanarTwoViewModel(const TwoViewCorrespondences& correspondences,
+                                              size_t E_num_inliers, size_t F_num_inliers,
+                                              const TwoViewGeometryOptions& options) {
+  const EpipolarTwoViewModel epipolar =
+      ChooseEpipolarTwoViewModel(E_num_inliers, F_num_inliers, options);
+  const double num_inliers_sought =
+      epipolar == EpipolarTwoViewModel::kCalibrated
+          ? options.max_H_inlier_ratio * static_cast<double>(E_num_inliers)
+      : epipolar == EpipolarTwoViewModel::kUncalibrated
+          ? options.max_H_inlier_ratio * static_cast<double>(F_num_inliers)
+          : static_cast<double>(MinNumTwoViewInliers(options));
+  const LoRansac<HomographyMatrixEstimator> ransac(
+      BoundedRansacOptions(options, options.ransac.max_error, kHomographyStream, num_inliers_sought,
+                           correspondences.size()));
+  return ransac.Estimate(correspondences.points1, correspondences.points2);
+}
+
+TwoViewDecision DecideTwoViewGeometry(size_t E_num_inliers, size_t F_num_inliers,
+                                      size_t H_num_inliers, const TwoViewGeometryOptions& options) {
+  TwoViewDecision decision;
+  const auto keep = [&](TwoViewModelKind model, size_t num_inliers) {
+    decision.model = model;
+    decision.num_inliers = num_inliers;
+  };
+  // The epipolar model's inliers; H's instead when H explains most of them and more.
+  const auto planar_or = [&](int epipolar_config, size_t epipolar_num_inliers) {
+    if (Ratio(H_num_inliers, epipolar_num_inliers) > options.max_H_inlier_ratio) {
+      decision.config = TwoViewGeometry::kPlanarOrPanoramic;
+      if (H_num_inliers > decision.num_inliers) keep(TwoViewModelKind::kHomography, H_num_inliers);
+    } else {
+      decision.config = epipolar_config;
+    }
+  };
+  switch (ChooseEpipolarTwoViewModel(E_num_inliers, F_num_inliers, options)) {
+    case EpipolarTwoViewModel::kCalibrated:
+      if (E_num_inliers >= F_num_inliers) {
+        keep(TwoViewModelKind::kEssential, E_num_inliers);
+      } else {
+        keep(TwoViewModelKind::kFundamental, F_num_inliers);
+      }
+      planar_or(TwoViewGeometry::kCalibrated, E_num_inliers);
+      break;
+    case EpipolarTwoViewModel::kUncalibrated:
+      keep(TwoViewModelKind::kFundamental, F_num_inliers);
+      planar_or(TwoViewGeometry::kUncalibrated, F_num_inliers);
+      break;
+    case EpipolarTwoViewModel::kNone:
+      if (H_num_inliers >= MinNumTwoViewInliers(options)) {
+        keep(TwoViewModelKind::kHomography, H_num_inliers);
+        decision.config = TwoViewGeometry::kPlanarOrPanoramic;
+      }
+      break;
+  }
+  return decision;
+}
+
 TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
                                         const std::vector<Eigen::Vector2d>& points1,
                                         const Camera& camera2,
@@ -223,233 +465,75 @@ TwoViewGeometry EstimateTwoViewGeometry(const Camera& camera1,
   options.Check();
   TwoViewGeometry geometry;
   geometry.config = TwoViewGeometry::kDegenerate;
+  const TwoViewCorrespondences correspondences = FiniteCorrespondences(points1, points2, matches);
+  const size_t min_num_inliers = MinNumTwoViewInliers(options);
+  if (correspondences.size() < min_num_inliers) return geometry;
 
-  // Matches with non-finite keypoints cannot be explained by any model: leave them out.
-  FeatureMatches valid_matches;
-  std::vector<Eigen::Vector2d> matched1, matched2;
-  valid_matches.reserve(matches.size());
-  matched1.reserve(matches.size());
-  matched2.reserve(matches.size());
-  for (const FeatureMatch& match : matches) {
-    PARALLAX_CHECK_LT(match.point2D_idx1, points1.size());
-    PARALLAX_CHECK_LT(match.point2D_idx2, points2.size());
-    const Eigen::Vector2d& point1 = points1[match.point2D_idx1];
-    const Eigen::Vector2d& point2 = points2[match.point2D_idx2];
-    if (!point1.allFinite() || !point2.allFinite()) continue;
-    valid_matches.push_back(match);
-    matched1.push_back(point1);
-    matched2.push_back(point2);
+  // 1. Calibrated: E first when the intrinsics are known: it is the model sought, and its
+  // 5-point samples find a given inlier ratio in far fewer trials than F's 7-point ones.
+  const bool calibrated = IsCalibratedPair(camera1, camera2, options);
+  CalibratedTwoViewModel E;
+  if (calibrated) E = EstimateCalibratedTwoViewModel(camera1, camera2, correspondences, options);
+  const size_t E_num_inliers = NumModelInliers(E.report);
+
+  // 2. Uncalibrated: with the intrinsics known, a pair E does not explain is not searched for
+  // an F (see uncalibrated_fallback): only H may still explain it, a pure rotation (where E is
+  // not determined) or a plane.
+  TwoViewModelReport F_report;
+  if (!calibrated || E_num_inliers >= min_num_inliers || options.uncalibrated_fallback) {
+    F_report = EstimateUncalibratedTwoViewModel(correspondences, E_num_inliers, options);
   }
-  const size_t min_num_inliers = std::max<size_t>(static_cast<size_t>(options.min_num_inliers), 1);
-  if (valid_matches.size() < min_num_inliers) return geometry;
+  const size_t F_num_inliers = NumModelInliers(F_report);
 
-  const size_t num_valid = valid_matches.size();
-  const double max_error_px = options.ransac.max_error;
-
-  // Trial budgets. A pair needs min_num_inliers inliers, and F and H only change the outcome
-  // when they explain a set fraction of the other model's inliers, so each RANSAC need only
-  // search for models with at least that many inliers (`num_inliers_sought`), which RANSAC
-  // turns into its bound on trials. The chance matches of a non-overlapping pair are few
-  // (15-35 on templeRing), which makes this a few dozen to a few hundred trials instead of
-  // the cap.
-  const auto bounded_options = [&](double max_error, RansacStream stream,
-                                   double num_inliers_sought) {
-    RansacOptions ransac_options = StreamRansacOptions(options, max_error, stream);
-    ransac_options.min_inlier_ratio = std::clamp(
-        num_inliers_sought / static_cast<double>(num_valid), options.ransac.min_inlier_ratio, 1.0);
-    return ransac_options;
-  };
-
-  const bool calibrated = options.use_essential_when_calibrated && camera1.has_prior_focal_length &&
-                          camera2.has_prior_focal_length && camera1.VerifyParams() &&
-                          camera2.VerifyParams();
-  // E's RANSAC stops once its models fall far short of the significance test below
-  // (SignificantInlierCount). Only E's: a calibrated epipolar model's chance rate varies
-  // little from model to model, while F's seven degrees of freedom (and H's eight) let a
-  // chance model take in a cluster of keypoints, and bounding their searches by such a
-  // model's rate lost weak real pairs (16 true inliers of 30 matches).
-  const uint64_t chance_seed = DeriveSeed(options.ransac.random_seed, 0);
-  const double max_log10_num_false_alarms = std::log10(options.max_num_false_alarms);
-
-  // E first when the intrinsics are known: it is the model sought, and its 5-point samples
-  // find a given inlier ratio in far fewer trials than F's 7-point ones.
-  RansacReport<Eigen::Matrix3d> E_report;
-  std::vector<Eigen::Vector2d> normalized1, normalized2;
-  double E_max_error = 0.0;
-  if (calibrated) {
-    normalized1.resize(matched1.size());
-    normalized2.resize(matched2.size());
-    for (size_t i = 0; i < matched1.size(); ++i) {
-      normalized1[i] = camera1.CamFromImg(matched1[i]);
-      normalized2[i] = camera2.CamFromImg(matched2[i]);
-    }
-    E_max_error = 0.5 * (camera1.CamFromImgThreshold(max_error_px) +
-                         camera2.CamFromImgThreshold(max_error_px));
-    const LoRansac<EssentialMatrixFivePointEstimator, EssentialMatrixEightPointEstimator> E_ransac(
-        bounded_options(E_max_error, kEssentialStream, static_cast<double>(min_num_inliers)));
-    E_report = E_ransac.Estimate(
-        normalized1, normalized2,
-        SignificantInlierCount<EssentialMatrixFivePointEstimator>(
-            normalized1, normalized2, E_max_error, chance_seed, max_log10_num_false_alarms));
-  }
-  const size_t E_num_inliers = E_report.success ? E_report.num_inliers : 0;
-
-  // Once E is found, F only matters when it explains more than E's inliers divided by
-  // min_E_F_inlier_ratio (the pair is then uncalibrated); otherwise it must reach the minimum.
-  const bool E_found = E_num_inliers >= min_num_inliers;
-  const double F_num_inliers_sought =
-      E_found ? static_cast<double>(E_num_inliers) / std::max(options.min_E_F_inlier_ratio, 1e-9)
-              : static_cast<double>(min_num_inliers);
-  // With the intrinsics known, a pair E does not explain is not searched for an F (see
-  // uncalibrated_fallback): only H may still explain it, a pure rotation (where E is not
-  // determined) or a plane.
-  RansacReport<Eigen::Matrix3d> F_report;
-  if (!calibrated || E_found || options.uncalibrated_fallback) {
-    const LoRansac<FundamentalMatrixSevenPointEstimator, FundamentalMatrixEightPointEstimator>
-        F_ransac(bounded_options(max_error_px, kFundamentalStream, F_num_inliers_sought));
-    F_report = F_ransac.Estimate(matched1, matched2);
-  }
-  const size_t F_num_inliers = F_report.success ? F_report.num_inliers : 0;
-
-  // H only changes the classification when it explains more than max_H_inlier_ratio of the
-  // inliers of the epipolar model chosen (or, with none, when it reaches the minimum).
-  const auto ratio = [](size_t numerator, size_t denominator) {
-    return denominator == 0 ? std::numeric_limits<double>::infinity()
-                            : static_cast<double>(numerator) / static_cast<double>(denominator);
-  };
-  const bool calibrated_branch =
-      E_found && ratio(E_num_inliers, F_num_inliers) >= options.min_E_F_inlier_ratio;
-  const bool uncalibrated_branch = !calibrated_branch && F_num_inliers >= min_num_inliers;
-  const double H_num_inliers_sought =
-      calibrated_branch     ? options.max_H_inlier_ratio * static_cast<double>(E_num_inliers)
-      : uncalibrated_branch ? options.max_H_inlier_ratio * static_cast<double>(F_num_inliers)
-                            : static_cast<double>(min_num_inliers);
-  const LoRansac<HomographyMatrixEstimator> H_ransac(
-      bounded_options(max_error_px, kHomographyStream, H_num_inliers_sought));
-  const auto H_report = H_ransac.Estimate(matched1, matched2);
-  const size_t H_num_inliers = H_report.success ? H_report.num_inliers : 0;
-
-  // COLMAP's classification: prefer the calibrated model when E explains (nearly) all of
-  // F's inliers; call the pair planar or panoramic when H explains most of them too.
-  const std::vector<char>* inlier_mask = nullptr;
-  size_t num_inliers = 0;
-  const RansacReport<Eigen::Matrix3d>* chosen = nullptr;
-  const auto choose = [&](const RansacReport<Eigen::Matrix3d>& report, size_t count) {
-    inlier_mask = &report.inlier_mask;
-    num_inliers = count;
-    chosen = &report;
-  };
-  if (calibrated_branch) {
-    if (E_num_inliers >= F_num_inliers) {
-      choose(E_report, E_num_inliers);
-    } else {
-      choose(F_report, F_num_inliers);
-    }
-    if (ratio(H_num_inliers, E_num_inliers) > options.max_H_inlier_ratio) {
-      geometry.config = TwoViewGeometry::kPlanarOrPanoramic;
-      if (H_num_inliers > num_inliers) choose(H_report, H_num_inliers);
-    } else {
-      geometry.config = TwoViewGeometry::kCalibrated;
-    }
-  } else if (uncalibrated_branch) {
-    choose(F_report, F_num_inliers);
-    if (ratio(H_num_inliers, F_num_inliers) > options.max_H_inlier_ratio) {
-      geometry.config = TwoViewGeometry::kPlanarOrPanoramic;
-      if (H_num_inliers > num_inliers) choose(H_report, H_num_inliers);
-    } else {
-      geometry.config = TwoViewGeometry::kUncalibrated;
-    }
-  } else if (H_num_inliers >= min_num_inliers) {
-    // Only H fits: a plane or a pure rotation, where F is not determined.
-    choose(H_report, H_num_inliers);
-    geometry.config = TwoViewGeometry::kPlanarOrPanoramic;
-  } else {
+  // 3. Planar, and the decision.
+  const TwoViewModelReport H_report =
+      EstimatePlanarTwoViewModel(correspondences, E_num_inliers, F_num_inliers, options);
+  const size_t H_num_inliers = NumModelInliers(H_report);
+  const TwoViewDecision decision =
+      DecideTwoViewGeometry(E_num_inliers, F_num_inliers, H_num_inliers, options);
+  if (decision.model == TwoViewModelKind::kNone) return geometry;
+  if (AreDegenerateOrChance(correspondences, E, F_report, H_report, decision, options)) {
     return geometry;
   }
+  geometry.config = decision.config;
 
-  // Matches along one line (or on one point) satisfy every model of the family, and one
-  // keypoint matched many times (no cross-check) is one observation, not many: refuse both.
-  if (AreNearlyCollinear(matched1, *inlier_mask, max_error_px) ||
-      AreNearlyCollinear(matched2, *inlier_mask, max_error_px) ||
-      CountDistinctKeypoints(valid_matches, *inlier_mask) < min_num_inliers) {
-    PARALLAX_LOG(Debug) << "Two-view inliers are collinear or repeated: degenerate pair";
-    geometry.config = TwoViewGeometry::kDegenerate;
-    return geometry;
-  }
-
-  // Chance matches: RANSAC always finds some model that explains a few of them, more the more
-  // matches there are. Keep the pair only when so many inliers would be unexpected.
-  double log10_num_false_alarms = 0.0;
-  if (chosen == &E_report) {
-    log10_num_false_alarms =
-        Log10NumFalseAlarms(EssentialMatrixFivePointEstimator(), normalized1, normalized2,
-                            E_report.model, E_max_error, num_inliers, chance_seed);
-  } else if (chosen == &F_report) {
-    log10_num_false_alarms =
-        Log10NumFalseAlarms(FundamentalMatrixSevenPointEstimator(), matched1, matched2,
-                            F_report.model, max_error_px, num_inliers, chance_seed);
-  } else {
-    log10_num_false_alarms =
-        Log10NumFalseAlarms(HomographyMatrixEstimator(), matched1, matched2, H_report.model,
-                            max_error_px, num_inliers, chance_seed);
-  }
-  if (log10_num_false_alarms > max_log10_num_false_alarms) {
-    PARALLAX_LOG(Debug) << "Two-view inliers (" << num_inliers << " of " << num_valid
-                        << ") could be chance: 10^" << log10_num_false_alarms
-                        << " false alarms expected; degenerate pair";
-    geometry.config = TwoViewGeometry::kDegenerate;
-    return geometry;
-  }
-
-  if (E_report.success) geometry.E = E_report.model;
+  // 4. The verified geometry: its models and inliers.
+  const bool kept_E = decision.model == TwoViewModelKind::kEssential;
+  const std::vector<char>& inlier_mask = kept_E ? E.report.inlier_mask
+                                         : decision.model == TwoViewModelKind::kFundamental
+                                             ? F_report.inlier_mask
+                                             : H_report.inlier_mask;
+  if (E.report.success) geometry.E = E.report.model;
   if (H_report.success) geometry.H = H_report.model;
   // When E explains the pair, F's RANSAC only searched for a better F and may have stopped
   // early: the F implied by E is then the better estimate.
-  if (F_report.success && chosen != &E_report) {
+  if (F_report.success && !kept_E) {
     geometry.F = F_report.model;
-  } else if (E_report.success) {
-    geometry.F = FundamentalFromEssential(E_report.model, camera1.CalibrationMatrix(),
+  } else if (E.report.success) {
+    geometry.F = FundamentalFromEssential(E.report.model, camera1.CalibrationMatrix(),
                                           camera2.CalibrationMatrix());
     geometry.F /= geometry.F.norm();
   }
-  geometry.inlier_matches.reserve(num_inliers);
-  for (size_t i = 0; i < valid_matches.size(); ++i) {
-    if ((*inlier_mask)[i]) geometry.inlier_matches.push_back(valid_matches[i]);
+  geometry.inlier_matches.reserve(decision.num_inliers);
+  for (size_t i = 0; i < correspondences.size(); ++i) {
+    if (inlier_mask[i]) geometry.inlier_matches.push_back(correspondences.matches[i]);
   }
-
-  if (DetectWatermark(camera1, matched1, camera2, matched2, *inlier_mask, num_inliers, options)) {
+  if (DetectWatermark(camera1, correspondences.points1, camera2, correspondences.points2,
+                      inlier_mask, decision.num_inliers, options)) {
     geometry.config = TwoViewGeometry::kWatermark;
     return geometry;
   }
+
+  // 5. The pose from the geometry; a planar pair's inliers from H and that pose.
   if (!options.compute_relative_pose ||
       !EstimateTwoViewGeometryPose(camera1, points1, camera2, points2, &geometry)) {
     return geometry;
   }
-
-  // In a plane or a pure rotation F (and E for a rotation) is a family, and RANSAC settles on
-  // the member that also collects the most outliers. H is the model there: a panoramic pair
-  // keeps H's inliers; a planar pair keeps H's inliers plus the matches that also fit the
-  // epipolar geometry of the pose from H (points off the plane).
-  const bool panoramic = geometry.config == TwoViewGeometry::kPanoramic;
-  if ((panoramic || geometry.config == TwoViewGeometry::kPlanar) &&
+  if ((geometry.config == TwoViewGeometry::kPanoramic ||
+       geometry.config == TwoViewGeometry::kPlanar) &&
       H_num_inliers >= min_num_inliers) {
-    std::vector<char> refined_mask = H_report.inlier_mask;
-    if (!panoramic) {
-      const Eigen::Matrix3d F_pose =
-          FundamentalFromEssential(EssentialFromPose(geometry.cam2_from_cam1),
-                                   camera1.CalibrationMatrix(), camera2.CalibrationMatrix());
-      const double max_squared_error = max_error_px * max_error_px;
-      for (size_t i = 0; i < refined_mask.size(); ++i) {
-        if (!refined_mask[i] && (*inlier_mask)[i] &&
-            ComputeSquaredSampsonError(matched1[i], matched2[i], F_pose) <= max_squared_error) {
-          refined_mask[i] = 1;
-        }
-      }
-    }
-    geometry.inlier_matches.clear();
-    for (size_t i = 0; i < valid_matches.size(); ++i) {
-      if (refined_mask[i]) geometry.inlier_matches.push_back(valid_matches[i]);
-    }
+    geometry.inlier_matches = PlanarInlierMatches(camera1, camera2, correspondences, geometry,
+                                                  inlier_mask, H_report, options);
   }
   return geometry;
 }

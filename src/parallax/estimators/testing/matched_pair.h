@@ -10,6 +10,7 @@
 
 #include "parallax/estimators/testing/two_view_scene.h"
 #include "parallax/feature/types.h"
+#include "parallax/geometry/essential_matrix.h"
 #include "parallax/geometry/testing/random_geometry.h"
 #include "parallax/geometry/triangulation.h"
 #include "parallax/math/random.h"
@@ -34,6 +35,22 @@ struct MatchedPair {
   std::vector<Eigen::Vector2d> points1, points2;
   FeatureMatches matches;
   std::vector<char> is_inlier;  // Per match.
+  // PairStructure::kPlane: normal . X = distance for the points X (cam1); distance 0 otherwise.
+  Eigen::Vector3d plane_normal = Eigen::Vector3d::Zero();
+  double plane_distance = 0;
+
+  Eigen::Matrix3d TrueE() const { return EssentialFromPose(cam2_from_cam1); }
+  Eigen::Matrix3d TrueF() const {
+    return FundamentalFromEssential(TrueE(), camera1.CalibrationMatrix(),
+                                    camera2.CalibrationMatrix());
+  }
+  // H = K2 (R + t n^T / d) K1^-1 of a planar pair.
+  Eigen::Matrix3d TrueH() const {
+    return camera2.CalibrationMatrix() *
+           (cam2_from_cam1.rotation.toRotationMatrix() +
+            cam2_from_cam1.translation * plane_normal.transpose() / plane_distance) *
+           camera1.CalibrationMatrix().inverse();
+  }
 
   // The true median triangulation angle of the inlier matches.
   double TrueTriAngle() const {
@@ -62,6 +79,10 @@ inline MatchedPair RandomMatchedPair(int num_matches, double noise_px, double ou
       translation);
   const Eigen::Vector3d normal = (Eigen::Vector3d(0, 0, 1) + 0.3 * RandomUnitVector()).normalized();
   const Eigen::Vector3d line_direction = RandomUnitVector();
+  if (structure == PairStructure::kPlane) {
+    pair.plane_normal = normal;
+    pair.plane_distance = 6.0;
+  }
   std::vector<Eigen::Vector2d> matched2;
   while (static_cast<int>(pair.points3D.size()) < num_matches) {
     const Eigen::Vector3d ray =
