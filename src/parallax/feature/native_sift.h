@@ -40,7 +40,7 @@ bool FrameRanksBefore(const SiftFrame& a, const SiftFrame& b);
 
 // The scale space and scratch one extraction works in (S + 2 float layers the size of the
 // first octave, a third as much for the other octaves, and rings of gradient rows). Defined in
-// native_sift.cc.
+// native_sift_internal.h.
 struct NativeSiftScaleSpace;
 
 // Buffers for ComputeNativeSift: passing the same object to successive calls reuses them,
