@@ -64,6 +64,10 @@ class VocabularyTree {
   static VocabularyTree Read(std::istream& stream, const std::string& name,
                              int expected_dimension = -1);
 
+  // Centroids per panel group: the distance kernel's two 8-float AVX2 vectors. The panels are
+  // laid out by it, and Write reads them back in the file's order.
+  static constexpr int kPanelLanes = 16;
+
  private:
   struct Node {
     uint32_t first_child = 0;
