@@ -74,17 +74,32 @@ struct RansacReport {
 };
 
 // Number of trials needed to draw one all-inlier sample of size `sample_size` with
-// probability `confidence`, given the inlier ratio.
+// probability `confidence`, when `num_inliers` of the `num_samples` correspondences are
+// inliers. A sample is drawn without replacement, so it is all inliers with probability
+//   P = prod_{i < k} (num_inliers - i) / (num_samples - i),
+// not (num_inliers / num_samples)^k, which overstates P (and understates the trials) the
+// more the fewer the inliers or correspondences (Schoenberger, Larsson & Pollefeys, "Fixing
+// the RANSAC stopping criterion", 2025; COLMAP's since). The maximum when P is 0 (fewer
+// inliers than the sample), 1 when every correspondence is an inlier.
 inline size_t ComputeNumRansacTrials(size_t num_inliers, size_t num_samples, size_t sample_size,
                                      double confidence, double multiplier) {
-  const double inlier_ratio = static_cast<double>(num_inliers) / num_samples;
-  const double all_inlier_probability = std::pow(inlier_ratio, static_cast<double>(sample_size));
+  num_inliers = std::min(num_inliers, num_samples);
+  if (num_inliers < sample_size) return std::numeric_limits<size_t>::max();
+  double all_inlier_probability = 1.0;
+  for (size_t i = 0; i < sample_size; ++i) {
+    all_inlier_probability *=
+        static_cast<double>(num_inliers - i) / static_cast<double>(num_samples - i);
+  }
   if (all_inlier_probability <= std::numeric_limits<double>::epsilon()) {
     return std::numeric_limits<size_t>::max();
   }
   if (all_inlier_probability >= 1.0 - std::numeric_limits<double>::epsilon()) return 1;
   const double trials = std::log(1.0 - confidence) / std::log(1.0 - all_inlier_probability);
-  return static_cast<size_t>(std::ceil(multiplier * trials));
+  const double needed = std::ceil(multiplier * trials);
+  if (!(needed < static_cast<double>(std::numeric_limits<size_t>::max()))) {
+    return std::numeric_limits<size_t>::max();
+  }
+  return static_cast<size_t>(needed);
 }
 
 template <typename Estimator, typename LocalEstimator = Estimator>

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <limits>
 
 #include "parallax/math/random.h"
 
@@ -164,6 +165,35 @@ TEST(LoRansac, InliersSoughtDoesNotStopASearchThatFoundEnough) {
   EXPECT_EQ(sought.num_trials, plain.num_trials);
   EXPECT_EQ(sought.num_inliers, plain.num_inliers);
   EXPECT_EQ(sought.num_inliers, 50u);
+}
+
+// The all-inlier probability of a sample drawn without replacement, by hand: 10 inliers of
+// 20, samples of 3: P = (10 9 8) / (20 19 18) = 2 / 19, so log(0.01) / log(17 / 19) = 41.4
+// trials, 42; (10 / 20)^3 = 1 / 8 would have given 35.
+TEST(ComputeNumRansacTrials, ExactProductForSamplingWithoutReplacement) {
+  EXPECT_EQ(ComputeNumRansacTrials(10, 20, 3, 0.99, 1.0), 42u);
+  EXPECT_EQ(ComputeNumRansacTrials(10, 20, 3, 0.99, 3.0), 125u);  // ceil(3 x 41.4)
+  // 3 of 4, samples of 3: P = (3 2 1) / (4 3 2) = 1 / 4.
+  EXPECT_EQ(ComputeNumRansacTrials(3, 4, 3, 0.99, 1.0), 17u);
+  // 50 of 100, samples of 7: P = 0.00624, 1,104 trials at 0.999 (0.5^7 would give 881).
+  EXPECT_EQ(ComputeNumRansacTrials(50, 100, 7, 0.999, 1.0), 1104u);
+}
+
+TEST(ComputeNumRansacTrials, EdgeCases) {
+  constexpr size_t kMax = std::numeric_limits<size_t>::max();
+  // Fewer inliers than a sample: no sample is all inliers.
+  EXPECT_EQ(ComputeNumRansacTrials(2, 20, 3, 0.99, 1.0), kMax);
+  EXPECT_EQ(ComputeNumRansacTrials(0, 20, 3, 0.99, 1.0), kMax);
+  EXPECT_EQ(ComputeNumRansacTrials(0, 0, 3, 0.99, 1.0), kMax);
+  // Every correspondence an inlier: the first sample is.
+  EXPECT_EQ(ComputeNumRansacTrials(20, 20, 3, 0.99, 1.0), 1u);
+  EXPECT_EQ(ComputeNumRansacTrials(3, 3, 3, 0.99, 3.0), 1u);
+  // More inliers than correspondences count as all.
+  EXPECT_EQ(ComputeNumRansacTrials(25, 20, 3, 0.99, 1.0), 1u);
+  // Chances too small to count: the maximum, not an overflowing conversion.
+  EXPECT_EQ(ComputeNumRansacTrials(8, 100000, 8, 0.99, 1.0), kMax);
+  // A zero multiplier asks for no trials.
+  EXPECT_EQ(ComputeNumRansacTrials(10, 20, 3, 0.99, 0.0), 0u);
 }
 
 TEST(LoRansac, TooFewPointsFails) {
