@@ -247,6 +247,7 @@ def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: 
         confidence: float = ...,
         uncalibrated_fallback: bool = ...,
         max_num_trials: int = ...,
+        ransac_sampler: Union[str, os.PathLike] = ...,
         match_batch_size: int = ...,
         ) -> MatchResult: ...
 
@@ -322,6 +323,7 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         confidence: float = ...,
         uncalibrated_fallback: bool = ...,
         max_num_trials: int = ...,
+        ransac_sampler: Union[str, os.PathLike] = ...,
         match_batch_size: int = ...,
         input_model: Union[str, os.PathLike] = ...,
         init_min_inliers: int = ...,

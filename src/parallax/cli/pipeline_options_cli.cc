@@ -193,6 +193,18 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
                  "Geometric verification RANSAC trials at most, per model (E, F, H)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option_function<std::string>(
+         "--ransac-sampler",
+         [options](const std::string& name) {
+           const bool progressive = name == "progressive";
+           options->geometry.ransac.sampler =
+               progressive ? RansacSampler::kProgressive : RansacSampler::kUniform;
+           options->matching.order_by_ratio = progressive;
+         },
+         "Geometric verification's RANSAC samples: uniform, or progressive (PROSAC: each pair's "
+         "matches ordered by Lowe's ratio and sampled from the most distinctive on)")
+      ->default_str("uniform")
+      ->check(CLI::IsMember({"uniform", "progressive"}));
   app.add_option("--match-batch-size", options->batch_size,
                  "Pairs stored per transaction: a killed run loses at most one batch of work")
       ->capture_default_str()

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #if defined(__AVX2__)
 #include <immintrin.h>
@@ -171,6 +172,7 @@ FeatureMatches SelectMatches(const BestTwo& rows, const std::vector<int>* best_r
   const float max_ratio = static_cast<float>(options.max_ratio);
   const float max_distance = static_cast<float>(options.max_distance);
   FeatureMatches matches;
+  std::vector<float> ratios;
   for (size_t i = 0; i < rows.best.size(); ++i) {
     const int j = rows.best_index[i];
     if (j < 0) continue;
@@ -180,8 +182,17 @@ FeatureMatches SelectMatches(const BestTwo& rows, const std::vector<int>* best_r
     if (!(distance1 < max_ratio * distance2)) continue;
     if (best_row_of_col != nullptr && (*best_row_of_col)[j] != static_cast<int>(i)) continue;
     matches.push_back({static_cast<point2D_t>(i), static_cast<point2D_t>(j)});
+    if (options.order_by_ratio) ratios.push_back(distance1 / distance2);
   }
-  return matches;
+  if (!options.order_by_ratio) return matches;
+  // distance2 > 0 here (distance1 < max_ratio * distance2); an infinite one gives ratio 0.
+  std::vector<size_t> order(matches.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&ratios](size_t a, size_t b) { return ratios[a] < ratios[b]; });
+  FeatureMatches ordered(matches.size());
+  for (size_t k = 0; k < order.size(); ++k) ordered[k] = matches[order[k]];
+  return ordered;
 }
 
 }  // namespace

@@ -11,7 +11,11 @@ struct FeatureMatchingOptions {
   double max_ratio = 0.8;     // Lowe's ratio test on Euclidean distances.
   double max_distance = 0.7;  // Absolute bound on the (unit-vector) Euclidean distance.
   bool cross_check = true;    // Keep only mutual nearest neighbours.
-  int num_threads = -1;       // -1: all cores.
+  // Matches by increasing ratio of their distances (the most distinctive first, ties in
+  // image 1's order): the quality order that progressive RANSAC sampling draws from
+  // (RansacSampler::kProgressive). Otherwise in image 1's keypoint order.
+  bool order_by_ratio = false;
+  int num_threads = -1;  // -1: all cores.
   void Check() const;
 };
 

@@ -190,6 +190,42 @@ TEST(MatchDescriptors, RandomDescriptorsAgreeWithBruteForce) {
   }
 }
 
+// order_by_ratio: the same matches, by increasing ratio of the distances to the nearest and
+// second-nearest neighbours, the quality order progressive RANSAC sampling draws from.
+TEST(MatchDescriptors, OrderedByRatioTheMostDistinctiveFirst) {
+  const RowMatrixXf values1 = RandomUnitDescriptors(300);
+  RowMatrixXf values2 = RandomUnitDescriptors(500);
+  PlantMatches(values1, 200, 0.1, &values2);
+  const FeatureDescriptors bytes1 = Quantised(values1), bytes2 = Quantised(values2);
+  const RowMatrixXd distances = BruteForceDistances(bytes1, bytes2);
+  FeatureMatchingOptions options = Options(0.9, 0.9, true, 2);
+  const FeatureMatches by_index =
+      MatchDescriptors(PrepareDescriptors(bytes1), PrepareDescriptors(bytes2), options);
+  options.order_by_ratio = true;
+  const FeatureMatches by_ratio =
+      MatchDescriptors(PrepareDescriptors(bytes1), PrepareDescriptors(bytes2), options);
+  ASSERT_GT(by_index.size(), 50u);
+  const auto key = [](const FeatureMatch& a, const FeatureMatch& b) {
+    return a.point2D_idx1 < b.point2D_idx1;
+  };
+  FeatureMatches sorted = by_ratio;
+  std::sort(sorted.begin(), sorted.end(), key);
+  EXPECT_EQ(sorted, by_index);
+  const auto ratio = [&distances](const FeatureMatch& match) {
+    double second = std::numeric_limits<double>::infinity();
+    for (Eigen::Index j = 0; j < distances.cols(); ++j) {
+      if (j != static_cast<Eigen::Index>(match.point2D_idx2)) {
+        second = std::min(second, distances(match.point2D_idx1, j));
+      }
+    }
+    return distances(match.point2D_idx1, match.point2D_idx2) / second;
+  };
+  for (size_t k = 1; k < by_ratio.size(); ++k) {
+    EXPECT_LE(ratio(by_ratio[k - 1]), ratio(by_ratio[k]) + 1e-5) << k;
+  }
+  EXPECT_LT(ratio(by_ratio.front()), ratio(by_ratio.back()));
+}
+
 TEST(MatchDescriptors, NearestNeighbourOfEveryQueryWithoutFilters) {
   // With the ratio test and distance bound off, every query is matched to its nearest
   // neighbour (bar exact ties, which the ratio test at 1.0 still rejects).

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "parallax/math/random.h"
+#include "parallax/optim/progressive_sampler.h"
 #include "parallax/util/check.h"
 
 namespace parallax {
@@ -27,7 +28,14 @@ namespace parallax {
 // residuals), and whenever a new best model appears runs local optimisation: the local
 // estimator (non-minimal, e.g. the 8-point on all inliers) re-fits on the inliers, iterated
 // while the score improves (Chum et al., "Locally Optimized RANSAC", 2003). The number of
-// trials adapts to the best inlier ratio seen.
+// trials adapts to the best inlier ratio seen. Samples are uniform, or progressive (PROSAC)
+// for correspondences sorted from the most to the least likely inlier.
+
+// How LoRansac draws its minimal samples.
+enum class RansacSampler {
+  kUniform,      // Uniformly among all correspondences.
+  kProgressive,  // PROSAC (ProgressiveSampler): the correspondences' order is their quality.
+};
 
 struct RansacOptions {
   // Inlier threshold on the residual (the estimator's unit, not squared; estimators that
@@ -46,6 +54,19 @@ struct RansacOptions {
   int max_num_trials = 10000;
   // Local optimisation rounds per new best model (0 disables LO).
   int local_optimization_iterations = 10;
+  // How samples are drawn; kProgressive only where the correspondences come sorted by quality
+  // (feature matches by Lowe's ratio: FeatureMatchingOptions::order_by_ratio). Uniform by
+  // default: progressive sampling verified fewer image pairs (docs/performance.md, "Two-view
+  // RANSAC: uniform samples, not PROSAC").
+  RansacSampler sampler = RansacSampler::kUniform;
+  // kProgressive: the trial by which its samples have grown to all correspondences (PROSAC's
+  // T_N; Chum & Matas's 200,000). Beyond the trial caps, so that a search stopped early has
+  // sampled mostly the best matches.
+  double progressive_num_trials = 200000;
+  // kProgressive's stopping rule, PROSAC's (ProsacTermination): the share of correspondences
+  // that a wrong model explains by chance (its beta), bounding how many inliers among the n
+  // best a model must have to mean anything.
+  double progressive_chance_inlier_ratio = 0.05;
   // Seed of the run's own generator: the same seed and data draw the same samples, whatever
   // thread runs it. Callers that run many estimations derive one seed per run (DeriveSeed).
   uint64_t random_seed = 0;
@@ -60,6 +81,9 @@ struct RansacOptions {
     PARALLAX_CHECK_GT(max_num_trials, 0);
     PARALLAX_CHECK_LE(min_num_trials, max_num_trials);
     PARALLAX_CHECK_GE(local_optimization_iterations, 0);
+    PARALLAX_CHECK(sampler == RansacSampler::kUniform || sampler == RansacSampler::kProgressive);
+    PARALLAX_CHECK_GT(progressive_num_trials, 0.0);
+    PARALLAX_CHECK(progressive_chance_inlier_ratio > 0.0 && progressive_chance_inlier_ratio < 1.0);
   }
 };
 
@@ -101,6 +125,66 @@ inline size_t ComputeNumRansacTrials(size_t num_inliers, size_t num_samples, siz
   }
   return static_cast<size_t>(needed);
 }
+
+// PROSAC's stopping rule (Chum & Matas 2005, sec. 2.2) for progressive sampling, whose
+// samples all come from the n best correspondences: stop once the best model's inliers among
+// them, I_n,
+//  - are not random: a model fit to a sample with an outlier has each other correspondence
+//    as an inlier with probability beta, so I_n - m ~ Binomial(n - m, beta); I_n must be at
+//    least the count that such a model reaches with probability below 5 %;
+//  - are maximal: the trials so far would have drawn an all-inlier sample of the n best with
+//    `confidence` (ComputeNumRansacTrials of I_n among n, with `multiplier`). The progressive
+//    samples of a quality order are at least as likely all inliers as uniform ones of the n
+//    best, so this is the uniform bound on a smaller, cleaner set.
+// Where the best matches come first, the n best hold far fewer outliers than all N, and the
+// search stops long before the bound for all N (which still applies).
+class ProsacTermination {
+ public:
+  ProsacTermination(size_t sample_size, double confidence, double multiplier,
+                    double chance_inlier_ratio)
+      : sample_size_(sample_size),
+        confidence_(confidence),
+        multiplier_(multiplier),
+        beta_(chance_inlier_ratio) {}
+
+  // After `num_trials` trials drawn from the n best, of which the best model explains
+  // `num_inliers`.
+  bool Satisfied(size_t num_trials, size_t n, size_t num_inliers) {
+    if (num_inliers < MinNonRandomInliers(n)) return false;
+    return num_trials >=
+           ComputeNumRansacTrials(num_inliers, n, sample_size_, confidence_, multiplier_);
+  }
+
+  // m + the smallest j with P[Binomial(n - m, beta) >= j] < 5 %.
+  size_t MinNonRandomInliers(size_t n) {
+    if (n < min_inliers_.size()) return min_inliers_[n];
+    min_inliers_.resize(n + 1, 0);
+    for (size_t k = first_unknown_; k <= n; ++k) {
+      const size_t trials = k > sample_size_ ? k - sample_size_ : 0;
+      // P[X <= j - 1] >= 0.95 first at j: the pmf summed up from 0, in logs to not underflow.
+      const double log_beta = std::log(beta_), log_rest = std::log1p(-beta_);
+      const double log_n_factorial = std::lgamma(static_cast<double>(trials) + 1.0);
+      double cdf = 0.0;
+      size_t j = 0;
+      for (; j <= trials && cdf < 1.0 - kPsi; ++j) {
+        cdf += std::exp(log_n_factorial - std::lgamma(static_cast<double>(j) + 1.0) -
+                        std::lgamma(static_cast<double>(trials - j) + 1.0) +
+                        static_cast<double>(j) * log_beta +
+                        static_cast<double>(trials - j) * log_rest);
+      }
+      min_inliers_[k] = sample_size_ + j;
+    }
+    first_unknown_ = n + 1;
+    return min_inliers_[n];
+  }
+
+ private:
+  static constexpr double kPsi = 0.05;  // The paper's chance of a random model passing.
+  const size_t sample_size_;
+  const double confidence_, multiplier_, beta_;
+  std::vector<size_t> min_inliers_;  // By n, computed up to first_unknown_ - 1.
+  size_t first_unknown_ = 0;
+};
 
 template <typename Estimator, typename LocalEstimator = Estimator>
 class LoRansac {
@@ -154,14 +238,29 @@ class LoRansac {
         ComputeNumRansacTrials(
             static_cast<size_t>(std::ceil(options_.min_inlier_ratio * num_samples)), num_samples,
             kSampleSize, options_.confidence, options_.min_inlier_ratio_trials_multiplier));
-    max_trials = std::max(max_trials, static_cast<size_t>(options_.min_num_trials));
+    const size_t max_trials_floor = static_cast<size_t>(options_.min_num_trials);
+    max_trials = std::max(max_trials, max_trials_floor);
 
+    const bool progressive = options_.sampler == RansacSampler::kProgressive;
+    ProgressiveSampler progressive_sampler(num_samples, kSampleSize,
+                                           options_.progressive_num_trials);
+    ProsacTermination prosac_termination(kSampleSize, options_.confidence,
+                                         options_.dynamic_num_trials_multiplier,
+                                         options_.progressive_chance_inlier_ratio);
+    std::vector<size_t> sample;
+    // Progressive: the best model's inliers among the i best correspondences, by i.
+    std::vector<size_t> best_inliers_in_head;
     size_t trial = 0;
     for (; trial < max_trials; ++trial) {
-      Shuffle(kSampleSize, &indices, &generator);
+      if (progressive) {
+        progressive_sampler.Sample(&generator, &sample);
+      } else {
+        Shuffle(kSampleSize, &indices, &generator);
+      }
+      const std::vector<size_t>& sample_indices = progressive ? sample : indices;
       for (size_t i = 0; i < kSampleSize; ++i) {
-        X_sample[i] = X[indices[i]];
-        Y_sample[i] = Y[indices[i]];
+        X_sample[i] = X[sample_indices[i]];
+        Y_sample[i] = Y[sample_indices[i]];
       }
       models.clear();
       estimator_.Estimate(X_sample, Y_sample, &models);
@@ -184,6 +283,21 @@ class LoRansac {
                                                       options_.min_inlier_ratio_trials_multiplier));
         }
         max_trials = std::max<size_t>(std::min(max_trials, needed), options_.min_num_trials);
+        if (progressive) {
+          estimator_.Residuals(X, Y, best_model, &residuals);
+          best_inliers_in_head.assign(num_samples + 1, 0);
+          for (size_t i = 0; i < num_samples; ++i) {
+            best_inliers_in_head[i + 1] =
+                best_inliers_in_head[i] + (residuals[i] <= max_squared_error);
+          }
+        }
+      }
+      if (progressive && !best_inliers_in_head.empty() && trial + 1 >= max_trials_floor) {
+        const size_t n = progressive_sampler.NumPointsSampled();
+        if (prosac_termination.Satisfied(trial + 1, n, best_inliers_in_head[n])) {
+          ++trial;
+          break;
+        }
       }
     }
 

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <iostream>
 #include <limits>
+#include <numeric>
 
 #include "parallax/math/random.h"
 
@@ -194,6 +196,82 @@ TEST(ComputeNumRansacTrials, EdgeCases) {
   EXPECT_EQ(ComputeNumRansacTrials(8, 100000, 8, 0.99, 1.0), kMax);
   // A zero multiplier asks for no trials.
   EXPECT_EQ(ComputeNumRansacTrials(10, 20, 3, 0.99, 0.0), 0u);
+}
+
+// Points on a line, and four times as many outliers, in quality order: the 100 inliers rank
+// among the first 150 (as matches with low ratios mostly are), the outliers fill the rest.
+void QualityOrderedLine(std::vector<double>* X, std::vector<double>* Y) {
+  for (int i = 0; i < 500; ++i) {
+    const double x = RandomUniformReal(-10, 10);
+    const bool inlier = i < 150 ? i % 3 != 2 : false;
+    X->push_back(x);
+    Y->push_back(inlier ? 2 * x - 1 + RandomGaussian(0, 0.05) : RandomUniformReal(-30, 30));
+  }
+}
+
+TEST(LoRansac, ProgressiveSamplingFindsTheModelInFewerTrials) {
+  SetPRNGSeed(11);
+  std::vector<double> X, Y;
+  QualityOrderedLine(&X, &Y);
+  RansacOptions options;
+  options.max_error = 0.2;
+  const auto uniform = LoRansac<LineEstimator>(options).Estimate(X, Y);
+  options.sampler = RansacSampler::kProgressive;
+  const auto progressive = LoRansac<LineEstimator>(options).Estimate(X, Y);
+  for (const auto* report : {&uniform, &progressive}) {
+    ASSERT_TRUE(report->success);
+    EXPECT_NEAR(report->model(0), 2.0, 0.01);
+    EXPECT_NEAR(report->model(1), -1.0, 0.05);
+    EXPECT_GE(report->num_inliers, 98u);
+  }
+  std::cerr << "trials: uniform " << uniform.num_trials << ", progressive "
+            << progressive.num_trials << "\n";
+  EXPECT_LT(5 * progressive.num_trials, uniform.num_trials);
+  // The same seed, the same samples.
+  const auto again = LoRansac<LineEstimator>(options).Estimate(X, Y);
+  EXPECT_EQ(again.num_trials, progressive.num_trials);
+  EXPECT_EQ(again.model, progressive.model);
+  EXPECT_EQ(again.inlier_mask, progressive.inlier_mask);
+}
+
+// Without a quality order (inliers anywhere) progressive sampling still finds the model: it
+// grows to all points and ends under the uniform bound.
+TEST(LoRansac, ProgressiveSamplingWithoutAQualityOrder) {
+  SetPRNGSeed(12);
+  std::vector<double> X, Y;
+  QualityOrderedLine(&X, &Y);
+  std::vector<size_t> order(X.size());
+  std::iota(order.begin(), order.end(), 0);
+  Shuffle(order.size(), &order);
+  std::vector<double> shuffled_X, shuffled_Y;
+  for (const size_t i : order) {
+    shuffled_X.push_back(X[i]);
+    shuffled_Y.push_back(Y[i]);
+  }
+  RansacOptions options;
+  options.max_error = 0.2;
+  options.sampler = RansacSampler::kProgressive;
+  const auto report = LoRansac<LineEstimator>(options).Estimate(shuffled_X, shuffled_Y);
+  ASSERT_TRUE(report.success);
+  EXPECT_NEAR(report.model(0), 2.0, 0.01);
+  EXPECT_GE(report.num_inliers, 98u);
+}
+
+TEST(ProsacTermination, NonRandomnessAndMaximality) {
+  ProsacTermination termination(2, 0.99, 1.0, 0.05);
+  // Binomial(n - 2, 0.05) exceeds j with 5 % chance: n = 2 needs a third inlier it cannot
+  // have; n = 5, two of the three others (P[X >= 2] = 0.007, P[X >= 1] = 0.14).
+  EXPECT_EQ(termination.MinNonRandomInliers(2), 3u);
+  EXPECT_EQ(termination.MinNonRandomInliers(5), 4u);
+  EXPECT_GT(termination.MinNonRandomInliers(1000), 2u + 50u);  // Above the mean, 49.9.
+  EXPECT_LT(termination.MinNonRandomInliers(1000), 2u + 70u);
+  // 2 of 2 is random; 5 of 5 is not and needs one trial; 40 of 100 after 20 trials is not
+  // yet maximal (ComputeNumRansacTrials(40, 100, 2, 0.99, 1) = 27), after 27 it is.
+  EXPECT_FALSE(termination.Satisfied(100, 2, 2));
+  EXPECT_TRUE(termination.Satisfied(1, 5, 5));
+  EXPECT_EQ(ComputeNumRansacTrials(40, 100, 2, 0.99, 1.0), 27u);
+  EXPECT_FALSE(termination.Satisfied(20, 100, 40));
+  EXPECT_TRUE(termination.Satisfied(27, 100, 40));
 }
 
 TEST(LoRansac, TooFewPointsFails) {
