@@ -56,7 +56,7 @@ void DamageVerifiedMatches(const Reconstruction& truth, const DamageOptions& opt
                            Database* database) {
   std::mt19937_64 generator(options.seed);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  database->BeginTransaction();
+  DatabaseTransaction transaction(database);
   for (auto [pair_id, geometry] : database->ReadTwoViewGeometries()) {
     const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
     const Image& image2 = truth.GetImage(image_id2);
@@ -76,7 +76,7 @@ void DamageVerifiedMatches(const Reconstruction& truth, const DamageOptions& opt
     database->DeleteTwoViewGeometry(image_id1, image_id2);
     database->WriteTwoViewGeometry(image_id1, image_id2, geometry);
   }
-  database->EndTransaction();
+  transaction.Commit();
 }
 
 int Make(const std::filesystem::path& out, SyntheticDatasetOptions scene,

@@ -63,7 +63,7 @@ std::vector<std::pair<image_t, image_t>> ShardPairSharing::ShareOf(
 
 std::vector<PairMatchStats> MergePairsFromShard(const Database& shard, Database* database) {
   std::vector<PairMatchStats> merged;
-  database->BeginTransaction();
+  DatabaseTransaction transaction(database);
   for (const auto& [pair_id, geometry] : shard.ReadTwoViewGeometries()) {
     const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
     if (database->ExistsTwoViewGeometry(image_id1, image_id2)) continue;
@@ -82,7 +82,7 @@ std::vector<PairMatchStats> MergePairsFromShard(const Database& shard, Database*
     stats.config = geometry.config;
     merged.push_back(stats);
   }
-  database->EndTransaction();
+  transaction.Commit();
   return merged;
 }
 

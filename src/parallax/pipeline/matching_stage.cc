@@ -363,13 +363,13 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
         progress.Increment();
       });
 
-      store->BeginTransaction();
+      DatabaseTransaction transaction(store);
       for (const PairJob& job : jobs) {
         if (!job.done) continue;
         if (!job.has_matches) store->WriteMatches(job.image_id1, job.image_id2, job.matches);
         store->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
       }
-      store->EndTransaction();
+      transaction.Commit();
 
       for (const PairJob& job : jobs) {
         if (!job.done) continue;

@@ -197,37 +197,6 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
-// Begins a transaction unless one is already open (an explicit BeginTransaction), commits on
-// Commit(), rolls back if left by an exception.
-class ScopedTransaction {
- public:
-  ScopedTransaction(sqlite3* db, const std::filesystem::path& path) : db_(db), path_(path) {
-    owns_ = sqlite3_get_autocommit(db) != 0;
-    if (owns_) Exec("BEGIN IMMEDIATE TRANSACTION;");
-  }
-  ~ScopedTransaction() {
-    if (owns_ && !committed_) sqlite3_exec(db_, "ROLLBACK;", nullptr, nullptr, nullptr);
-  }
-  void Commit() {
-    if (owns_) Exec("COMMIT;");
-    committed_ = true;
-  }
-
- private:
-  void Exec(const char* sql) {
-    char* error = nullptr;
-    if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-      const std::string message = DescribeError(db_, error != nullptr ? error : "unknown error");
-      sqlite3_free(error);
-      throw InputError(path_.string() + ": " + sql + " failed: " + message);
-    }
-  }
-  sqlite3* db_;
-  const std::filesystem::path& path_;
-  bool owns_ = false;
-  bool committed_ = false;
-};
-
 // Keypoint blobs are rows x 6 float32 (x, y, a11, a12, a21, a22); COLMAP also reads the older
 // 2-column (x, y) and 4-column (x, y, scale, orientation) layouts, and so do we.
 constexpr int kKeypointCols = 6;
@@ -490,7 +459,7 @@ Database::Database(const std::filesystem::path& path) : path_(path) {
     // The upgrade never adds COLMAP 4's tables, so the layout is known before it.
     colmap4_layout_ = HasColmap4Layout(db_, path_);
     if (!UpgradeSchema(db_, path_, colmap4_layout_, /*apply=*/false)) {
-      ScopedTransaction transaction(db_, path_);
+      DatabaseTransaction transaction(this, DatabaseTransaction::Nesting::kJoin);
       UpgradeSchema(db_, path_, colmap4_layout_, /*apply=*/true);
       transaction.Commit();
     }
@@ -502,23 +471,39 @@ Database::Database(const std::filesystem::path& path) : path_(path) {
 }
 
 Database::~Database() {
-  // An unfinished explicit transaction is rolled back by close.
   if (db_ != nullptr) sqlite3_close_v2(db_);
 }
 
 void Database::Execute(const std::string& sql) const { Exec(db_, path_, sql); }
 
-void Database::BeginTransaction() {
-  PARALLAX_CHECK_MSG(sqlite3_get_autocommit(db_) != 0, "nested transactions are not supported");
-  Execute("BEGIN IMMEDIATE TRANSACTION;");
-}
-
-void Database::EndTransaction() {
-  PARALLAX_CHECK_MSG(sqlite3_get_autocommit(db_) == 0, "no transaction is open");
-  Execute("COMMIT;");
-}
-
 void Database::Checkpoint() { Execute("PRAGMA wal_checkpoint(TRUNCATE);"); }
+
+// ----- Transactions -------------------------------------------------------------------------
+
+DatabaseTransaction::DatabaseTransaction(Database* database)
+    : DatabaseTransaction(database, Nesting::kRefuse) {}
+
+DatabaseTransaction::DatabaseTransaction(Database* database, Nesting nesting)
+    : database_(database) {
+  PARALLAX_CHECK(database != nullptr);
+  const bool open = sqlite3_get_autocommit(database->db_) == 0;
+  PARALLAX_CHECK_MSG(!open || nesting == Nesting::kJoin, "nested transactions are not supported");
+  owns_ = !open;
+  // IMMEDIATE takes the write lock now, so a busy database fails here (after the busy timeout)
+  // and not at a write halfway through.
+  if (owns_) database_->Execute("BEGIN IMMEDIATE TRANSACTION;");
+}
+
+DatabaseTransaction::~DatabaseTransaction() {
+  // Fails harmlessly when SQLite has already rolled back (a full disk, for one).
+  if (owns_ && !committed_) sqlite3_exec(database_->db_, "ROLLBACK;", nullptr, nullptr, nullptr);
+}
+
+void DatabaseTransaction::Commit() {
+  PARALLAX_CHECK_MSG(!committed_, "the transaction is already committed");
+  if (owns_) database_->Execute("COMMIT;");
+  committed_ = true;
+}
 
 // ----- Cameras ------------------------------------------------------------------------------
 
@@ -671,7 +656,7 @@ image_t Database::WriteImageWithFeatures(const std::string& name, camera_t camer
                                          const std::optional<GeodeticPosition>& gps_prior,
                                          const std::optional<KeypointColors>& colors) {
   PARALLAX_CHECK_EQ(keypoints.size(), static_cast<size_t>(descriptors.rows()));
-  ScopedTransaction transaction(db_, path_);
+  DatabaseTransaction transaction(this, DatabaseTransaction::Nesting::kJoin);
   const image_t image_id = WriteImage(name, camera_id);
   WriteKeypoints(image_id, keypoints);
   WriteDescriptors(image_id, descriptors);
@@ -774,7 +759,7 @@ std::optional<KeypointColors> Database::ReadKeypointColors(image_t image_id) con
 }
 
 void Database::DeleteImage(image_t image_id) {
-  ScopedTransaction transaction(db_, path_);
+  DatabaseTransaction transaction(this, DatabaseTransaction::Nesting::kJoin);
   camera_t camera_id = kInvalidCameraId;
   {
     Statement statement(db_, path_, "SELECT camera_id FROM images WHERE image_id=?;");

@@ -31,7 +31,8 @@ struct ImageFileFingerprint {
 // encoding), so `colmap mapper` reads a Parallax database and Parallax reads COLMAP's.
 // A COLMAP 4 database (rigs and frames, pose priors in their own table) is read, matched and
 // mapped as it is; adding cameras or images to one is refused (InputError).
-// Every write is one transaction, so a run killed at any moment leaves a valid database.
+// Every write is one transaction, so a run killed at any moment leaves a valid database; a
+// DatabaseTransaction (below) makes many writes one, and is the only way to open one.
 // Not thread-safe: one Database per thread, or serialise access.
 class Database {
  public:
@@ -113,9 +114,6 @@ class Database {
   size_t NumMatchedPairs() const;
   size_t NumVerifiedPairs() const;
 
-  // Explicit transaction around many writes (faster); nesting is not supported.
-  void BeginTransaction();
-  void EndTransaction();
   // Moves everything in the write-ahead log into the database file and empties the log, so
   // that the file alone holds the database (for readers on other machines of a cluster).
   void Checkpoint();
@@ -123,12 +121,52 @@ class Database {
   const std::filesystem::path& Path() const { return path_; }
 
  private:
+  friend class DatabaseTransaction;
   void Execute(const std::string& sql) const;
   void RefuseNewImagesInColmap4Layout() const;
   std::vector<std::pair<image_t, GeodeticPosition>> ReadColmap4GpsPriors() const;
   std::filesystem::path path_;
   sqlite3* db_ = nullptr;
   bool colmap4_layout_ = false;
+};
+
+// Many writes as one transaction (faster than one each, and all or nothing), opened and closed
+// by scope: the constructor begins it, Commit() makes it durable, and the destructor rolls it
+// back when Commit() was not reached, so a throw between the writes leaves nothing half
+// written and the database usable (docs/style.md, habit 15; COLMAP's DatabaseTransaction).
+//
+//   DatabaseTransaction transaction(&database);
+//   for (...) database.WriteMatches(...);
+//   transaction.Commit();
+//
+// Writes inside it that are one transaction on their own (WriteImageWithFeatures, DeleteImage)
+// join it. Nesting is refused: a second DatabaseTransaction on a database with one open throws
+// CheckError. It must not outlive its Database.
+class DatabaseTransaction {
+ public:
+  // Begins an IMMEDIATE transaction, which takes the write lock now (waiting for another
+  // writer as any write does) rather than at the first write. Throws CheckError when a
+  // transaction is already open on `database`, InputError when SQLite cannot begin one.
+  explicit DatabaseTransaction(Database* database);
+  // Rolls back unless committed.
+  ~DatabaseTransaction();
+  DatabaseTransaction(const DatabaseTransaction&) = delete;
+  DatabaseTransaction& operator=(const DatabaseTransaction&) = delete;
+
+  // Commits (InputError when SQLite cannot; the destructor then rolls back). Once only.
+  void Commit();
+
+ private:
+  friend class Database;
+  // kJoin: a write of Database's own that must be atomic; it joins an open transaction
+  // (which then decides) instead of refusing it.
+  enum class Nesting { kRefuse, kJoin };
+  DatabaseTransaction(Database* database, Nesting nesting);
+
+  Database* database_;
+  // False when it joined an open transaction: Commit() and the destructor leave that one be.
+  bool owns_ = false;
+  bool committed_ = false;
 };
 
 }  // namespace parallax

@@ -243,7 +243,7 @@ void WriteSyntheticDatabase(const Reconstruction& truth, Database* database,
   PARALLAX_CHECK(database != nullptr);
   Sampler sampler(options.seed);
   // One transaction for everything: far faster than one per write.
-  database->BeginTransaction();
+  DatabaseTransaction transaction(database);
   for (const auto& [camera_id, camera] : truth.Cameras()) {
     database->WriteCamera(camera, /*use_camera_id=*/true);
   }
@@ -349,7 +349,7 @@ void WriteSyntheticDatabase(const Reconstruction& truth, Database* database,
     database->WriteMatches(database_id1, database_id2, raw_matches);
     database->WriteTwoViewGeometry(database_id1, database_id2, geometry);
   }
-  database->EndTransaction();
+  transaction.Commit();
   PARALLAX_LOG(Debug) << "synthetic database: " << truth.NumImages() << " images, "
                       << pair_matches.size() << " matched pairs";
 }
