@@ -34,6 +34,8 @@ struct ImageFileFingerprint {
 // Every write is one transaction, so a run killed at any moment leaves a valid database; a
 // DatabaseTransaction (below) makes many writes one, and is the only way to open one.
 // Not thread-safe: one Database per thread, or serialise access.
+// Written in database.cc (open, schema, transactions), database_features.cc (cameras, images,
+// features) and database_matches.cc (matches, two-view geometries).
 class Database {
  public:
   // Opens or creates the file (and its schema). Throws InputError naming the path when the
