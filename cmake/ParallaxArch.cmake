@@ -5,7 +5,8 @@
 # default elsewhere. PARALLAX_NATIVE=ON builds for the build machine (-march=native) instead.
 include(CheckCXXCompilerFlag)
 
-# Whether the build targets x86-64 (also read by math/CMakeLists.txt for the reproducer).
+# Whether the build targets x86-64 (also read by tools/wide_constant_fault/CMakeLists.txt for
+# the reproducer).
 set(PARALLAX_X86_64 FALSE)
 if(CMAKE_SYSTEM_PROCESSOR MATCHES "^(x86_64|AMD64|amd64)$")
   set(PARALLAX_X86_64 TRUE)
@@ -26,8 +27,8 @@ function(parallax_set_instruction_set)
   # broadcast of its first word ({{1, 1}, {0, 0}} stored as four 1.0s) whenever by-pieces moves
   # are 256 bits wide, as AVX-512 tuning (and -march=native on such CPUs) makes them. Capping
   # by-pieces moves and stores at 128 bits keeps every such constant a complete 128-bit one,
-  # which that code path handles correctly. src/parallax/util/wide_constant_regression_test.cc
-  # holds the reproducer.
+  # which that code path handles correctly. tools/wide_constant_fault/ holds the reproducer and
+  # its regression test.
   if(PARALLAX_X86_64 AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU"
      AND CMAKE_CXX_COMPILER_VERSION VERSION_GREATER_EQUAL 12)
     check_cxx_compiler_flag("-mmove-max=128 -mstore-max=128" PARALLAX_HAS_MOVE_MAX)

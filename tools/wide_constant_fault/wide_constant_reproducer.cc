@@ -1,4 +1,4 @@
-#include "parallax/math/wide_constant_reproducer.h"
+#include "wide_constant_reproducer.h"
 
 namespace parallax {
 

@@ -4,7 +4,7 @@
 // cmake/ParallaxArch.cmake protects AVX-512 code. It runs where the CPU has AVX-512.
 #include <gtest/gtest.h>
 
-#include "parallax/math/wide_constant_reproducer.h"
+#include "wide_constant_reproducer.h"
 
 namespace parallax {
 namespace {

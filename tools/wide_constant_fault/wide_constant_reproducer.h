@@ -1,6 +1,7 @@
-// The reproducer of a GCC 12 code-generation fault (docs/portable-build.md). This file's .cc is
-// compiled with -march=x86-64-v4 into its regression test only, never into the library: call
-// these functions only where the CPU has AVX-512 (CpuHasX86_64_V4()).
+// The reproducer of a GCC 12 code-generation fault (docs/portable-build.md, README.md here).
+// This file's .cc is compiled with -march=x86-64-v4 into its regression test and
+// show-wide-constant-fault.sh only, never into a Parallax library: call these functions only
+// where the CPU has AVX-512 (CpuHasX86_64_V4()).
 #pragma once
 
 #include <Eigen/Core>
