@@ -12,10 +12,10 @@
 #include <cstring>
 #include <fstream>
 #include <map>
-#include <stdexcept>
 #include <tuple>
 
 #include "parallax/math/random.h"
+#include "parallax/scene/testing/random_features.h"
 #include "parallax/util/check.h"
 #include "parallax/util/test_dir.h"
 
@@ -23,6 +23,9 @@ namespace parallax {
 namespace {
 
 using test::EigenMatrixNear;
+using test::RandomDescriptors;
+using test::RandomKeypoints;
+using test::RandomMatches;
 using test::Rigid3dNear;
 
 namespace fs = std::filesystem;
@@ -36,32 +39,6 @@ class DatabaseTest : public ::testing::Test {
   const fs::path dir_ = scoped_dir_.path();
   fs::path path_;
 };
-
-FeatureKeypoints RandomKeypoints(size_t count) {
-  FeatureKeypoints keypoints(count);
-  for (FeatureKeypoint& keypoint : keypoints) {
-    keypoint = FeatureKeypoint(RandomUniformReal(0.0f, 640.0f), RandomUniformReal(0.0f, 480.0f),
-                               RandomUniformReal(1.0f, 8.0f), RandomUniformReal(-3.0f, 3.0f));
-  }
-  return keypoints;
-}
-
-FeatureDescriptors RandomDescriptors(size_t count) {
-  FeatureDescriptors descriptors(count, 128);
-  for (Eigen::Index i = 0; i < descriptors.size(); ++i) {
-    descriptors.data()[i] = static_cast<uint8_t>(RandomUniformReal(0.0, 255.99));
-  }
-  return descriptors;
-}
-
-FeatureMatches RandomMatches(size_t count) {
-  FeatureMatches matches(count);
-  for (size_t i = 0; i < count; ++i) {
-    matches[i].point2D_idx1 = static_cast<point2D_t>(i);
-    matches[i].point2D_idx2 = static_cast<point2D_t>(RandomUniformReal(0.0, 1000.0));
-  }
-  return matches;
-}
 
 TwoViewGeometry RandomGeometry(size_t num_inliers) {
   TwoViewGeometry geometry;
@@ -427,107 +404,6 @@ TEST_F(DatabaseTest, DegeneratePairsAndNumInliers) {
   ASSERT_EQ(num_inliers.size(), 2u);
   EXPECT_EQ(num_inliers[0], std::make_pair(ImagePairToPairId(1, 3), 25));
   EXPECT_EQ(num_inliers[1], std::make_pair(ImagePairToPairId(2, 3), 30));
-}
-
-TEST_F(DatabaseTest, TransactionBatchesWritesUntilCommit) {
-  Database database(path_);
-  const camera_t camera_id =
-      database.WriteCamera(Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
-  {
-    DatabaseTransaction transaction(&database);
-    // Writes that are one transaction on their own join it.
-    database.WriteImageWithFeatures("a.png", camera_id, RandomKeypoints(5), RandomDescriptors(5));
-    for (image_t i = 1; i <= 20; ++i) database.WriteMatches(i, i + 1, RandomMatches(3));
-    {
-      // Another connection does not see uncommitted writes.
-      Database reader(path_);
-      EXPECT_EQ(reader.NumMatchedPairs(), 0u);
-      EXPECT_EQ(reader.NumImages(), 0u);
-    }
-    transaction.Commit();
-    EXPECT_THROW(transaction.Commit(), CheckError);
-  }
-  Database reader(path_);
-  EXPECT_EQ(reader.NumMatchedPairs(), 20u);
-  EXPECT_EQ(reader.NumKeypoints(1), 5u);
-}
-
-TEST_F(DatabaseTest, TransactionRefusesNesting) {
-  Database database(path_);
-  DatabaseTransaction transaction(&database);
-  EXPECT_THROW(DatabaseTransaction nested(&database), CheckError);
-  // The refused one touched nothing: the open one still writes and commits.
-  database.WriteMatches(1, 2, RandomMatches(4));
-  transaction.Commit();
-  EXPECT_EQ(Database(path_).NumMatchedPairs(), 1u);
-}
-
-TEST_F(DatabaseTest, TransactionLeftByAThrowRollsBack) {
-  Database database(path_);
-  const camera_t camera_id =
-      database.WriteCamera(Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
-  EXPECT_THROW(
-      {
-        DatabaseTransaction transaction(&database);
-        database.WriteImageWithFeatures("a.png", camera_id, RandomKeypoints(5),
-                                        RandomDescriptors(5));
-        database.WriteMatches(1, 2, RandomMatches(3));
-        throw std::runtime_error("a stage fails between two writes");
-      },
-      std::runtime_error);
-  // Nothing of it was written, on this connection or another.
-  EXPECT_EQ(database.NumImages(), 0u);
-  EXPECT_EQ(database.NumMatchedPairs(), 0u);
-  EXPECT_FALSE(database.ExistsKeypoints(1));
-  EXPECT_EQ(Database(path_).NumImages(), 0u);
-  // What was committed before it stays.
-  EXPECT_EQ(database.NumCameras(), 1u);
-
-  // The database is usable afterwards: a write on its own, and a new transaction.
-  database.WriteMatches(3, 4, RandomMatches(2));
-  {
-    DatabaseTransaction transaction(&database);
-    database.WriteMatches(5, 6, RandomMatches(2));
-    transaction.Commit();
-  }
-  Database reader(path_);
-  EXPECT_EQ(reader.NumMatchedPairs(), 2u);
-  EXPECT_TRUE(reader.ExistsMatches(3, 4));
-  EXPECT_TRUE(reader.ExistsMatches(5, 6));
-}
-
-TEST_F(DatabaseTest, TransactionWithAFailedWriteRollsBackTheEarlierOnes) {
-  Database database(path_);
-  database.WriteMatches(1, 2, RandomMatches(3));
-  {
-    DatabaseTransaction transaction(&database);
-    database.WriteMatches(2, 3, RandomMatches(3));
-    // The pair is stored already: SQLite refuses the row (InputError naming the file).
-    EXPECT_THROW(database.WriteMatches(2, 1, RandomMatches(3)), InputError);
-    // Left without Commit(), as a caller that does not catch leaves it.
-  }
-  EXPECT_FALSE(database.ExistsMatches(2, 3));
-  EXPECT_EQ(Database(path_).NumMatchedPairs(), 1u);
-}
-
-TEST_F(DatabaseTest, AtomicWritesJoinAnOpenTransaction) {
-  Database database(path_);
-  const camera_t camera_id =
-      database.WriteCamera(Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 500, 64, 48));
-  const image_t kept = database.WriteImageWithFeatures("kept.png", camera_id, RandomKeypoints(3),
-                                                       RandomDescriptors(3));
-  {
-    DatabaseTransaction transaction(&database);
-    // Each would begin its own transaction; inside this one they join it, so rolling it back
-    // undoes them too.
-    database.WriteImageWithFeatures("new.png", camera_id, RandomKeypoints(4), RandomDescriptors(4));
-    database.DeleteImage(kept);
-    EXPECT_EQ(database.NumImages(), 1u);
-  }
-  EXPECT_EQ(database.NumImages(), 1u);
-  EXPECT_TRUE(database.ExistsImage(kept));
-  EXPECT_FALSE(database.ImageIdByName("new.png").has_value());
-  EXPECT_EQ(database.NumKeypoints(kept), 3u);
 }
 
 TEST_F(DatabaseTest, RejectsFilesThatAreNotDatabases) {
