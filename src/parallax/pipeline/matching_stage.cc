@@ -3,39 +3,15 @@
 #include <algorithm>
 #include <optional>
 #include <unordered_map>
-#include <unordered_set>
 
-#include "parallax/math/random.h"
+#include "parallax/pipeline/pair_batch_matcher.h"
 #include "parallax/util/check.h"
-#include "parallax/util/interrupt.h"
 #include "parallax/util/logging.h"
 #include "parallax/util/progress.h"
-#include "parallax/util/threading.h"
 #include "parallax/util/timer.h"
 
 namespace parallax {
 namespace {
-
-// What matching and verification need of one image, loaded once per batch that uses it.
-struct ImageFeatures {
-  MatchableDescriptors descriptors;
-  CellFiledDescriptors filed;           // Approximate matching's cells of `descriptors`.
-  MatchableDescriptors largest;         // The preemptive test's largest-scale features.
-  std::vector<Eigen::Vector2d> points;  // Keypoints as stored (pixel centres at +0.5).
-};
-
-struct PairJob {
-  image_t image_id1;
-  image_t image_id2;
-  bool has_matches;        // Matches stored by an earlier run: verify those.
-  FeatureMatches matches;  // Putative matches (read or computed).
-  TwoViewGeometry geometry;
-  double matching_seconds = 0;
-  double verification_seconds = 0;
-  int num_preemptive_matches = -1;
-  bool preemptive_rejected = false;
-  bool done = false;  // False when a signal stopped the batch before this pair ran.
-};
 
 bool IsVerified(const PairMatchStats& pair) {
   return pair.config != TwoViewGeometry::kUndefined &&
@@ -55,22 +31,6 @@ std::vector<std::pair<image_t, image_t>> PairsNotStored(
     }
   }
   return remaining;
-}
-
-// The rows of the `count` largest-scale keypoints (all when there are fewer).
-MatchableDescriptors LargestFeatures(const FeatureKeypoints& keypoints,
-                                     const MatchableDescriptors& descriptors, int count) {
-  std::vector<int> order(keypoints.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  const size_t keep = std::min(order.size(), static_cast<size_t>(count));
-  std::partial_sort(order.begin(), order.begin() + keep, order.end(), [&keypoints](int a, int b) {
-    const float scale_a = keypoints[a].ComputeScale(), scale_b = keypoints[b].ComputeScale();
-    return scale_a != scale_b ? scale_a > scale_b : a < b;
-  });
-  order.resize(keep);
-  MatchableDescriptors largest;
-  SelectRows(descriptors, order, &largest);
-  return largest;
 }
 
 // Whether approximate matching applies. `auto` turns it on where the pairs come from
@@ -135,6 +95,56 @@ std::optional<DescriptorCells> TrainDescriptorCells(const ApproximateMatchingOpt
   return DescriptorCells::Train(std::move(sample), options.cells);
 }
 
+// The images with features, sorted by name, and the cameras they use.
+struct MatchableImages {
+  std::vector<image_t> image_ids;
+  std::unordered_map<image_t, camera_t> camera_of_image;
+  std::unordered_map<camera_t, Camera> cameras;
+};
+
+MatchableImages ReadMatchableImages(const Database& database) {
+  std::vector<Image> images = database.ReadAllImages();
+  std::sort(images.begin(), images.end(),
+            [](const Image& a, const Image& b) { return a.name < b.name; });
+  MatchableImages matchable;
+  for (const Image& image : images) {
+    if (!database.ExistsKeypoints(image.image_id) || !database.ExistsDescriptors(image.image_id)) {
+      PARALLAX_LOG(Warning) << database.Path().string() << ": image " << image.name
+                            << " has no features; not matched";
+      continue;
+    }
+    matchable.image_ids.push_back(image.image_id);
+    matchable.camera_of_image[image.image_id] = image.camera_id;
+  }
+  for (Camera& camera : database.ReadAllCameras()) {
+    matchable.cameras[camera.camera_id] = std::move(camera);
+  }
+  for (const auto& [image_id, camera_id] : matchable.camera_of_image) {
+    if (matchable.cameras.count(camera_id) == 0) {
+      throw InputError(database.Path().string() + ": image " + std::to_string(image_id) +
+                       " refers to missing camera " + std::to_string(camera_id));
+    }
+  }
+  return matchable;
+}
+
+// The verified pairs' loop-closing neighbours that no earlier round tried (retrieval's
+// second chance for images that verified pairs tie together).
+std::vector<std::pair<image_t, image_t>> LoopPairsToMatch(const MatchingStageOptions& options,
+                                                          const std::vector<image_t>& image_ids,
+                                                          const Database& database) {
+  std::vector<std::pair<image_pair_t, int>> verified;
+  for (const auto& [pair_id, num_inliers] : database.ReadTwoViewGeometryNumInliers()) {
+    if (num_inliers >= options.geometry.min_num_inliers)
+      verified.emplace_back(pair_id, num_inliers);
+  }
+  // Pairs tried and rejected before are not candidates again (nor counted as skipped).
+  size_t num_rejected_before = 0;
+  return PairsNotStored(
+      LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors), database,
+      &num_rejected_before);
+}
+
 }  // namespace
 
 std::optional<ApproximateMatchingOptions::Mode> ApproximateMatchingModeFromName(
@@ -174,29 +184,8 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
   MatchingStageResult stats;
   const bool coordinator = sharing == nullptr || sharing->IsCoordinator();
 
-  std::vector<Image> images = database->ReadAllImages();
-  std::sort(images.begin(), images.end(),
-            [](const Image& a, const Image& b) { return a.name < b.name; });
-  std::vector<image_t> image_ids;
-  std::unordered_map<image_t, camera_t> camera_of_image;
-  for (const Image& image : images) {
-    if (!database->ExistsKeypoints(image.image_id) ||
-        !database->ExistsDescriptors(image.image_id)) {
-      PARALLAX_LOG(Warning) << database->Path().string() << ": image " << image.name
-                            << " has no features; not matched";
-      continue;
-    }
-    image_ids.push_back(image.image_id);
-    camera_of_image[image.image_id] = image.camera_id;
-  }
-  std::unordered_map<camera_t, Camera> cameras;
-  for (Camera& camera : database->ReadAllCameras()) cameras[camera.camera_id] = std::move(camera);
-  for (const auto& [image_id, camera_id] : camera_of_image) {
-    if (cameras.count(camera_id) == 0) {
-      throw InputError(database->Path().string() + ": image " + std::to_string(image_id) +
-                       " refers to missing camera " + std::to_string(camera_id));
-    }
-  }
+  const MatchableImages matchable = ReadMatchableImages(*database);
+  const std::vector<image_t>& image_ids = matchable.image_ids;
 
   // What the ranks of an interrupted distributed run stored goes into the database first, so
   // that no pair is matched again.
@@ -235,159 +224,25 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
     cells = TrainDescriptorCells(approximate, image_ids, *database);
   }
   stats.approximate = cells.has_value();
-  int num_cell_assignments = 0;
   if (cells) {
-    num_cell_assignments = std::min(options.approximate.cells.num_assignments, cells->NumCells());
     PARALLAX_LOG(Info) << "Matching: approximate nearest neighbours, in " << cells->NumCells()
-                       << " cells (each descriptor searched under its " << num_cell_assignments
+                       << " cells (each descriptor searched under its "
+                       << std::min(options.approximate.cells.num_assignments, cells->NumCells())
                        << " nearest; trained in " << cells_timer.ElapsedSeconds() << " s)";
   }
 
-  // Each pair runs on one thread; the parallelism is over pairs.
-  FeatureMatchingOptions matching_options = options.matching;
-  matching_options.num_threads = 1;
-  FeatureMatchingOptions preemptive_matching_options = matching_options;
-  if (options.preemptive.max_ratio > 0)
-    preemptive_matching_options.max_ratio = options.preemptive.max_ratio;
-  const size_t cache_capacity = 2 * static_cast<size_t>(options.pairs.block_size);
-  std::unordered_map<image_t, ImageFeatures> cache;
-  // Matches, verifies and stores `all_pairs` (this rank's share of them) in batches, one
-  // transaction each.
+  PairBatchMatcher matcher(options, *database, matchable.cameras, matchable.camera_of_image,
+                           cells ? &*cells : nullptr);
+  // This rank's share of `all_pairs` matched, verified and stored, then every rank's counted.
   const auto match_pairs = [&](const std::vector<std::pair<image_t, image_t>>& all_pairs,
                                const char* label) {
     const std::vector<std::pair<image_t, image_t>> pairs =
         sharing != nullptr ? sharing->ShareOf(all_pairs) : all_pairs;
     Database* const store = sharing != nullptr ? sharing->Store() : database;
-    std::vector<PairMatchStats> processed;
     ProgressReporter progress(label, pairs.size());
-
-    for (size_t batch_start = 0; batch_start < pairs.size(); batch_start += options.batch_size) {
-      const size_t batch_end = std::min(pairs.size(), batch_start + options.batch_size);
-
-      // Load the images this batch needs (database reads are sequential; preparing the
-      // descriptors is parallel).
-      std::vector<image_t> needed;
-      std::unordered_set<image_t> needed_set;
-      for (size_t k = batch_start; k < batch_end; ++k) {
-        for (image_t image_id : {pairs[k].first, pairs[k].second}) {
-          if (needed_set.insert(image_id).second) needed.push_back(image_id);
-        }
-      }
-      std::vector<image_t> missing;
-      for (image_t image_id : needed) {
-        if (cache.count(image_id) == 0) missing.push_back(image_id);
-      }
-      if (cache.size() + missing.size() > cache_capacity) {
-        for (auto it = cache.begin(); it != cache.end();) {
-          it = needed_set.count(it->first) > 0 ? std::next(it) : cache.erase(it);
-        }
-      }
-      std::vector<FeatureDescriptors> raw_descriptors(missing.size());
-      std::vector<FeatureKeypoints> keypoints(missing.size());
-      for (size_t m = 0; m < missing.size(); ++m) {
-        ImageFeatures& features = cache[missing[m]];
-        keypoints[m] = database->ReadKeypoints(missing[m]);
-        features.points.reserve(keypoints[m].size());
-        for (const FeatureKeypoint& keypoint : keypoints[m]) {
-          features.points.emplace_back(keypoint.x, keypoint.y);
-        }
-        raw_descriptors[m] = database->ReadDescriptors(missing[m]);
-        if (static_cast<size_t>(raw_descriptors[m].rows()) != keypoints[m].size()) {
-          throw InputError(database->Path().string() + ": image " + std::to_string(missing[m]) +
-                           " has " + std::to_string(keypoints[m].size()) + " keypoints but " +
-                           std::to_string(raw_descriptors[m].rows()) + " descriptors");
-        }
-      }
-      ParallelFor(0, missing.size(), options.num_threads, [&](size_t m) {
-        ImageFeatures& features = cache.at(missing[m]);
-        features.descriptors = PrepareDescriptors(std::move(raw_descriptors[m]));
-        // Exact matching reads an image's rows as image 1 of each of its pairs: packed once.
-        if (!cells) PackRows(&features.descriptors);
-        if (stats.preemptive) {
-          features.largest =
-              LargestFeatures(keypoints[m], features.descriptors, options.preemptive.num_features);
-        }
-        if (cells) {
-          features.filed =
-              FileDescriptorsByCell(features.descriptors, *cells, num_cell_assignments);
-        }
-      });
-      raw_descriptors.clear();
-
-      std::vector<PairJob> jobs(batch_end - batch_start);
-      for (size_t k = 0; k < jobs.size(); ++k) {
-        PairJob& job = jobs[k];
-        job.image_id1 = pairs[batch_start + k].first;
-        job.image_id2 = pairs[batch_start + k].second;
-        job.has_matches = store->ExistsMatches(job.image_id1, job.image_id2);
-        if (job.has_matches) job.matches = store->ReadMatches(job.image_id1, job.image_id2);
-      }
-
-      ParallelFor(0, jobs.size(), options.num_threads, [&](size_t k) {
-        // After a signal no new pair starts; the finished ones are stored below.
-        if (PendingInterruptSignal() != 0) return;
-        PairJob& job = jobs[k];
-        const ImageFeatures& features1 = cache.at(job.image_id1);
-        const ImageFeatures& features2 = cache.at(job.image_id2);
-        Timer pair_timer;
-        if (!job.has_matches && stats.preemptive) {
-          job.num_preemptive_matches = static_cast<int>(
-              MatchDescriptors(features1.largest, features2.largest, preemptive_matching_options)
-                  .size());
-          job.preemptive_rejected = job.num_preemptive_matches < options.preemptive.min_matches;
-        }
-        if (!job.has_matches && !job.preemptive_rejected) {
-          job.matches = cells ? MatchDescriptorsInCells(features1.filed, features2.filed,
-                                                        features2.descriptors, matching_options)
-                              : MatchDescriptors(features1.descriptors, features2.descriptors,
-                                                 matching_options);
-        }
-        job.matching_seconds = pair_timer.ElapsedSeconds();
-        pair_timer.Restart();
-        if (static_cast<int>(job.matches.size()) < options.geometry.min_num_inliers) {
-          // Too few to verify: recorded as degenerate so a resumed run does not retry it.
-          job.geometry.config = TwoViewGeometry::kDegenerate;
-        } else {
-          // The pair's seed comes from the run's and the pair's ids: the result does not
-          // depend on which thread verifies the pair, nor in what order.
-          TwoViewGeometryOptions pair_options = options.geometry;
-          pair_options.ransac.random_seed =
-              DeriveSeed(options.seed, ImagePairToPairId(job.image_id1, job.image_id2));
-          job.geometry = EstimateTwoViewGeometry(cameras.at(camera_of_image.at(job.image_id1)),
-                                                 features1.points,
-                                                 cameras.at(camera_of_image.at(job.image_id2)),
-                                                 features2.points, job.matches, pair_options);
-        }
-        job.verification_seconds = pair_timer.ElapsedSeconds();
-        job.done = true;
-        progress.Increment();
-      });
-
-      DatabaseTransaction transaction(store);
-      for (const PairJob& job : jobs) {
-        if (!job.done) continue;
-        if (!job.has_matches) store->WriteMatches(job.image_id1, job.image_id2, job.matches);
-        store->WriteTwoViewGeometry(job.image_id1, job.image_id2, job.geometry);
-      }
-      transaction.Commit();
-
-      for (const PairJob& job : jobs) {
-        if (!job.done) continue;
-        PairMatchStats pair_stats;
-        pair_stats.image_id1 = job.image_id1;
-        pair_stats.image_id2 = job.image_id2;
-        pair_stats.num_putative = static_cast<int>(job.matches.size());
-        pair_stats.num_inliers = static_cast<int>(job.geometry.inlier_matches.size());
-        pair_stats.config = job.geometry.config;
-        pair_stats.num_preemptive_matches = job.num_preemptive_matches;
-        pair_stats.preemptive_rejected = job.preemptive_rejected;
-        processed.push_back(pair_stats);
-        stats.matching_thread_seconds += job.matching_seconds;
-        stats.verification_thread_seconds += job.verification_seconds;
-      }
-      ThrowIfInterrupted(std::to_string(processed.size()) + " of " + std::to_string(pairs.size()) +
-                         " pairs are matched and verified in " + store->Path().string());
-    }
+    std::vector<PairMatchStats> processed =
+        matcher.MatchPairs(pairs, store, &progress, &stats.matching_thread_seconds,
+                           &stats.verification_thread_seconds);
     progress.Finish();
     if (sharing != nullptr) processed = sharing->Merge(database);
     for (const PairMatchStats& pair_stats : processed) {
@@ -409,16 +264,7 @@ MatchingStageResult RunMatchingStage(const MatchingStageOptions& options, Databa
     std::vector<std::pair<image_t, image_t>> loop_pairs;
     const Timer choosing_timer;
     if (coordinator && retrieval) {
-      std::vector<std::pair<image_pair_t, int>> verified;
-      for (const auto& [pair_id, num_inliers] : database->ReadTwoViewGeometryNumInliers()) {
-        if (num_inliers >= options.geometry.min_num_inliers)
-          verified.emplace_back(pair_id, num_inliers);
-      }
-      // Pairs tried and rejected before are not candidates again (nor counted as skipped).
-      size_t num_rejected_before = 0;
-      loop_pairs = PairsNotStored(
-          LoopClosingPairs(verified, image_ids, options.pairs.retrieval.num_loop_neighbors),
-          *database, &num_rejected_before);
+      loop_pairs = LoopPairsToMatch(options, image_ids, *database);
       if (!loop_pairs.empty()) {
         stats.num_pairs += loop_pairs.size();
         stats.selection.num_loop_pairs += loop_pairs.size();

@@ -5,8 +5,11 @@
 
 #include <Eigen/Geometry>
 #include <set>
+#include <stdexcept>
+#include <unordered_map>
 
 #include "parallax/math/random.h"
+#include "parallax/pipeline/pair_batch_matcher.h"
 #include "parallax/util/test_dir.h"
 
 namespace parallax {
@@ -104,6 +107,52 @@ TEST(PairSelection, SequentialOverlap) {
   EXPECT_EQ(SequentialPairs(ids, 10).size(), 10u);
   EXPECT_EQ(PairModeFromName("sequential"), PairMode::kSequential);
   EXPECT_FALSE(PairModeFromName("vocab_tree").has_value());
+}
+
+// The batch matcher's steps one at a time: load, match and verify, store.
+TEST_F(FeatureMatchingTest, BatchMatcherStepsLoadMatchVerifyAndStore) {
+  Database database(dir_ / "database.db");
+  MakeScene(&database, 3, 120, 40);
+  MatchingStageOptions options;
+  options.num_threads = 1;
+  std::unordered_map<camera_t, Camera> cameras;
+  for (Camera& camera : database.ReadAllCameras()) cameras[camera.camera_id] = camera;
+  std::unordered_map<image_t, camera_t> camera_of_image;
+  for (const Image& image : database.ReadAllImages()) {
+    camera_of_image[image.image_id] = image.camera_id;
+  }
+  PairBatchMatcher matcher(options, database, cameras, camera_of_image, /*cells=*/nullptr);
+  matcher.LoadFeatures({1, 2});
+  EXPECT_EQ(matcher.Features(1).points.size(), 160u);
+  EXPECT_THROW(matcher.Features(3), std::out_of_range);  // Not loaded.
+
+  PairJob job;
+  job.image_id1 = 1;
+  job.image_id2 = 2;
+  matcher.MatchAndVerify(&job);
+  EXPECT_TRUE(job.done);
+  EXPECT_EQ(job.matches.size(), 120u);  // Identical descriptors: every point, nothing else.
+  for (const FeatureMatch& match : job.matches) EXPECT_TRUE(IsCorrect(1, 2, match));
+  // The scene's camera has no prior focal length: verified by F.
+  EXPECT_EQ(job.geometry.config, TwoViewGeometry::kUncalibrated);
+  EXPECT_GE(job.geometry.inlier_matches.size(), 115u);
+
+  // Too few matches to verify: degenerate, so that a resumed run does not retry the pair.
+  PairJob few = job;
+  few.has_matches = true;
+  few.matches.resize(options.geometry.min_num_inliers - 1);
+  few.geometry = TwoViewGeometry();
+  matcher.MatchAndVerify(&few);
+  EXPECT_EQ(few.geometry.config, TwoViewGeometry::kDegenerate);
+
+  PairJob unfinished;  // A pair a signal stopped before it ran is not stored.
+  unfinished.image_id1 = 2;
+  unfinished.image_id2 = 3;
+  PairBatchMatcher::StoreJobs({job, unfinished}, &database);
+  EXPECT_TRUE(database.ExistsTwoViewGeometry(1, 2));
+  EXPECT_EQ(database.ReadMatches(1, 2).size(), 120u);
+  EXPECT_FALSE(database.ExistsTwoViewGeometry(2, 3));
+  EXPECT_FALSE(database.ExistsMatches(2, 3));
 }
 
 TEST_F(FeatureMatchingTest, ExhaustiveMatchesAndVerifiesEveryPair) {
