@@ -19,6 +19,13 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option("--init-min-tri-angle", mapper.init_min_triangulation_angle_deg,
                  "Median triangulation angle of the initial pair, degrees")
       ->capture_default_str();
+  app.add_option("--init-min-inliers-floor", mapper.init_min_num_inliers_floor,
+                 "When no pair qualifies, the two thresholds above are halved in turns, the "
+                 "inliers down to this")
+      ->capture_default_str();
+  app.add_option("--init-min-tri-angle-floor", mapper.init_min_triangulation_angle_floor_deg,
+                 "... and the angle down to this, degrees")
+      ->capture_default_str();
   app.add_option("--abs-pose-min-inliers", mapper.absolute_pose_min_num_inliers,
                  "PnP inliers an image needs to be registered")
       ->capture_default_str();

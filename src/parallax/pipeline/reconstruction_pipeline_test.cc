@@ -82,6 +82,15 @@ TEST(ReconstructionPipeline, PhotosAddedLaterAreRegisteredIntoTheEarlierModel) {
   ASSERT_TRUE(first.Success());
   ASSERT_EQ(first.mapping.models.front().NumRegImages(), 14u);
   EXPECT_EQ(first.mapping.num_input_model_images, 0u);
+  // How the model started: from a pair, at the thresholds as given (step 0).
+  const nlohmann::json& start = first.summary["models"][0]["start"];
+  EXPECT_EQ(start["from"], "pair");
+  EXPECT_EQ(start["images"].size(), 2u);
+  EXPECT_EQ(start["min_inliers"], options.mapping.mapper.init_min_num_inliers);
+  EXPECT_EQ(start["relaxation_step"], 0);
+  EXPECT_GE(start["median_tri_angle_deg"].get<double>(), start["min_tri_angle_deg"].get<double>());
+  EXPECT_EQ(first.summary["models"][0]["links"].size(), 0u);
+  EXPECT_EQ(first.summary["mapper"]["discarded_models"], 0);
 
   for (int index = 15; index <= 20; ++index) {
     fs::copy_file(dir / "scene" / view(index), dir / "photos" / view(index));
@@ -108,6 +117,7 @@ TEST(ReconstructionPipeline, PhotosAddedLaterAreRegisteredIntoTheEarlierModel) {
   EXPECT_FALSE(second.summary["mapper"].contains("type_reason"));  // The default, not chosen.
   EXPECT_EQ(second.summary["mapper"]["input_model"]["images_kept"], 12);
   EXPECT_EQ(second.summary["mapper"]["input_model"]["images_missing"].size(), 2u);
+  EXPECT_EQ(second.summary["models"][0]["start"]["from"], "input model");
   // Where the mapping time went, by phase; the adjustments' share is the solver's time.
   const nlohmann::json& phases = second.summary["mapper"]["phase_s"];
   EXPECT_GT(phases["registration"].get<double>(), 0.0);

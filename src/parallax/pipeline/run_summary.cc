@@ -12,6 +12,25 @@ nlohmann::json NumberOrNull(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
 
+// How a model started: from a given model, or from a pair and the thresholds it met (step 0:
+// as given; k: relaxed k times).
+nlohmann::json ModelStartToJson(const ModelStartReport& start,
+                                const std::map<image_t, std::string>& image_names) {
+  if (start.from_input_model) return {{"from", "input model"}};
+  const auto name = [&image_names](image_t image_id) {
+    const auto it = image_names.find(image_id);
+    return it == image_names.end() ? std::to_string(image_id) : it->second;
+  };
+  return {{"from", "pair"},
+          {"images", {name(start.image_id1), name(start.image_id2)}},
+          {"min_inliers", start.thresholds.min_num_inliers},
+          {"min_tri_angle_deg", start.thresholds.min_angle_deg},
+          {"relaxation_step", start.thresholds.step},
+          {"triangulated", start.num_triangulated},
+          {"median_tri_angle_deg", start.median_angle_deg},
+          {"pairs_tried_before", start.num_pairs_tried}};
+}
+
 }  // namespace
 
 nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimings& timings) {
@@ -118,10 +137,24 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
 
   nlohmann::json models = nlohmann::json::array();
   for (size_t index = 0; index < result.models.size(); ++index) {
-    models.push_back({{"path", "sparse/" + std::to_string(index)},
-                      {"images_registered", result.models[index].NumRegImages()},
-                      {"points3D", result.models[index].NumPoints3D()}});
+    nlohmann::json entry = {{"path", "sparse/" + std::to_string(index)},
+                            {"images_registered", result.models[index].NumRegImages()},
+                            {"points3D", result.models[index].NumPoints3D()}};
+    if (index < result.summary.models.size()) {
+      const MapperModelReport& report = result.summary.models[index];
+      entry["start"] = ModelStartToJson(report.start, result.image_names);
+      entry["joined_models"] = report.num_joined_models;
+      nlohmann::json links = nlohmann::json::array();
+      for (const ModelLink& link : report.links) {
+        links.push_back({{"model", link.model_index},
+                         {"image_pairs", link.num_image_pairs},
+                         {"matches", link.num_matches}});
+      }
+      entry["links"] = links;
+    }
+    models.push_back(entry);
   }
+  summary["mapper"]["discarded_models"] = result.summary.num_discarded_models;
   summary["models"] = models;
   return summary;
 }

@@ -7,6 +7,8 @@ namespace parallax {
 void IncrementalMapperOptions::Check() const {
   PARALLAX_CHECK_GE(init_min_num_inliers, 1);
   PARALLAX_CHECK_GE(init_min_triangulation_angle_deg, 0.0);
+  PARALLAX_CHECK_GE(init_min_num_inliers_floor, 1);
+  PARALLAX_CHECK_GE(init_min_triangulation_angle_floor_deg, 0.0);
   PARALLAX_CHECK_GE(init_max_trials, 1);
   absolute_pose.Check();
   absolute_pose_refinement.Check();
@@ -24,6 +26,7 @@ void IncrementalMapperOptions::Check() const {
   PARALLAX_CHECK_GE(global_ba_max_refinements, 1);
   PARALLAX_CHECK_GE(min_model_size, 2);
   PARALLAX_CHECK_GE(max_num_models, 1);
+  join.Check();
 }
 
 }  // namespace parallax

@@ -5,6 +5,7 @@
 
 #include "parallax/estimators/absolute_pose.h"
 #include "parallax/estimators/bundle_adjustment.h"
+#include "parallax/sfm/model_joiner.h"
 #include "parallax/sfm/observation_filter.h"
 #include "parallax/sfm/track_triangulation.h"
 
@@ -14,11 +15,14 @@ struct IncrementalMapperOptions {
   // The mapper's one seed: registration's PnP RANSAC draws from a seed derived from it per
   // image and attempt, so the same seed registers the same way whatever came before.
   uint64_t seed = 0;
-  // Initial pair.
+  // Initial pair. When no pair meets the two thresholds they are halved in turns, down to
+  // their floors (InitThresholdSchedule): a walk facing forwards has small angles everywhere.
   int init_min_num_inliers = 100;  // Triangulated points the initial pair must give.
   double init_min_triangulation_angle_deg =
-      16.0;                   // Median triangulation angle of the initial pair.
-  int init_max_trials = 200;  // Candidate pairs examined per angle threshold.
+      16.0;                             // Median triangulation angle of the initial pair.
+  int init_min_num_inliers_floor = 25;  // The relaxation goes no lower.
+  double init_min_triangulation_angle_floor_deg = 2.0;
+  int init_max_trials = 200;  // Candidate pairs examined per step of the relaxation.
   // Registration of the next image.
   AbsolutePoseEstimationOptions absolute_pose;
   AbsolutePoseRefinementOptions absolute_pose_refinement;
@@ -84,6 +88,10 @@ struct IncrementalMapperOptions {
   int min_model_size = 3;       // Smaller models are discarded.
   bool multiple_models = true;  // Start a new model when the current one is stuck.
   int max_num_models = 20;
+  // Join the models by the tracks they share, then register what is left against the whole
+  // and adjust it (JoinModels): fewer, larger models.
+  bool join_models = true;
+  ModelJoinerOptions join;
   void Check() const;
 };
 

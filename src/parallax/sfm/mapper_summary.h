@@ -10,6 +10,40 @@
 
 namespace parallax {
 
+// The thresholds an initial pair is held to at one step of the relaxation.
+struct InitThresholds {
+  int min_num_inliers = 0;     // Matches that must triangulate.
+  double min_angle_deg = 0.0;  // Their median triangulation angle.
+  int step = 0;                // 0: the thresholds as given; k: after k halvings.
+};
+
+// How a model started, for the log and summary.json.
+struct ModelStartReport {
+  bool from_input_model = false;  // Seeded by a given model rather than a pair.
+  image_t image_id1 = kInvalidImageId;
+  image_t image_id2 = kInvalidImageId;
+  InitThresholds thresholds;  // Those the pair met.
+  int num_triangulated = 0;
+  double median_angle_deg = 0.0;
+  int num_pairs_tried = 0;  // Pairs held to some thresholds before this one started.
+};
+
+// A model's verified pairs with another model's images.
+struct ModelLink {
+  int model_index = -1;  // The other model.
+  size_t num_image_pairs = 0;
+  size_t num_matches = 0;  // Inlier matches over those pairs.
+};
+
+// One returned model: how it started, and how it relates to the others.
+struct MapperModelReport {
+  ModelStartReport start;     // Of the largest model when several were joined into this one.
+  int num_joined_models = 1;  // Models of the run joined into this one (JoinModels).
+  size_t num_images = 0;
+  size_t num_points = 0;
+  std::vector<ModelLink> links;  // Most matches first; only models it has pairs with.
+};
+
 // What happened to each image, for summary.json and the log.
 struct MapperImageReport {
   int model_index = -1;  // Index into the returned models; -1 when not registered.
@@ -48,7 +82,10 @@ struct MapperSummary {
   // The bundle-adjustment solver's time, local and global.
   double BaSeconds() const { return phase_seconds.local_ba + phase_seconds.global_ba; }
   double seconds = 0;
-  std::string failure;  // Set when no model could be started.
+  std::string failure;                    // Set when no model could be started.
+  std::vector<MapperModelReport> models;  // One per returned model, in the same order.
+  // Models that ended smaller than min_model_size; their images stayed free for later ones.
+  int num_discarded_models = 0;
 };
 
 }  // namespace parallax

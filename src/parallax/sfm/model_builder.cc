@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
 #include <utility>
 
-#include "parallax/geometry/essential_matrix.h"
-#include "parallax/geometry/triangulation.h"
 #include "parallax/math/random.h"
 #include "parallax/sfm/observation_filter.h"
 #include "parallax/sfm/point_completion.h"
@@ -18,6 +17,12 @@
 namespace parallax {
 
 namespace {
+
+std::string FormatDegrees(double degrees) {
+  std::ostringstream stream;
+  stream << degrees << " deg";
+  return stream.str();
+}
 
 // The input's cameras and images, none registered yet.
 Reconstruction Unregistered(const MapperInput& input) {
@@ -41,27 +46,41 @@ ModelBuilder::ModelBuilder(const IncrementalMapperOptions& options, const Mapper
       model_(input.correspondence_graph, &reconstruction_),
       visibility_(&model_) {}
 
-// Finds an initial pair with enough points and triangulation angle, trying stricter angle
-// thresholds first. False when no pair qualifies.
-bool ModelBuilder::InitializeFromBestPair() {
+bool ModelBuilder::InitializeFromBestPair(InitialPairLedger* ledger) {
+  InitialPairLedger own_ledger;
+  if (ledger == nullptr) ledger = &own_ledger;
   std::vector<std::pair<image_pair_t, const TwoViewGeometry*>> candidates;
+  const std::vector<InitThresholds> schedule = InitThresholdSchedule(options_);
+  const int fewest_inliers = schedule.back().min_num_inliers;
   for (const auto& [pair_id, geometry] : input_.two_view_geometries) {
     const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
     if (used_images_.count(image_id1) || used_images_.count(image_id2)) continue;
-    if (geometry.config == TwoViewGeometry::kPanoramic) continue;
-    if (static_cast<int>(geometry.inlier_matches.size()) < options_.init_min_num_inliers) continue;
+    if (geometry.config == TwoViewGeometry::kPanoramic || ledger->started.count(pair_id)) continue;
+    if (ledger->failed_start_images.count(image_id1) &&
+        ledger->failed_start_images.count(image_id2)) {
+      continue;
+    }
+    if (static_cast<int>(geometry.inlier_matches.size()) < fewest_inliers) continue;
     candidates.emplace_back(pair_id, &geometry);
   }
   std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
     return a.second->inlier_matches.size() > b.second->inlier_matches.size();
   });
-  for (const double angle_factor : {1.0, 0.5, 0.25}) {
-    const double min_angle_deg = options_.init_min_triangulation_angle_deg * angle_factor;
+  int num_pairs_tried = 0;
+  for (const InitThresholds& thresholds : schedule) {
     int trials = 0;
     for (const auto& [pair_id, geometry] : candidates) {
+      // Sorted by inliers: the rest have too few for this step.
+      if (static_cast<int>(geometry->inlier_matches.size()) < thresholds.min_num_inliers) break;
       if (trials++ >= options_.init_max_trials) break;
-      if (InitializeFromPair(pair_id, *geometry, min_angle_deg)) return true;
+      ++num_pairs_tried;
+      if (InitializeFromPair(pair_id, *geometry, thresholds, ledger)) {
+        start_.num_pairs_tried = num_pairs_tried - 1;
+        return true;
+      }
     }
+    PARALLAX_LOG(Debug) << "mapper: no initial pair with " << thresholds.min_num_inliers
+                        << " inliers at a median angle of " << thresholds.min_angle_deg << " deg";
   }
   return false;
 }
@@ -71,7 +90,7 @@ bool ModelBuilder::InitializeFromBestPair() {
 // False (and nothing registered) when fewer than two qualify. The seed is a finished,
 // adjusted model: as COLMAP's mapper does with --input_path, it is not adjusted again
 // before the new images come in (see AdjustAfterRegistration).
-bool ModelBuilder::InitializeFromModel(const Reconstruction& seed) {
+bool ModelBuilder::InitializeFromModel(const Reconstruction& seed, SeedKind kind) {
   for (const auto& [camera_id, camera] : seed.Cameras()) {
     if (reconstruction_.ExistsCamera(camera_id)) {
       reconstruction_.GetCamera(camera_id).params = camera.params;
@@ -104,8 +123,12 @@ bool ModelBuilder::InitializeFromModel(const Reconstruction& seed) {
   }
   images_at_last_global_ba_ = reconstruction_.NumRegImages();
   points_at_last_global_ba_ = reconstruction_.NumPoints3D();
-  num_seed_images_ = seeded.size();
-  progress_->Increment(seeded.size());
+  start_ = ModelStartReport();
+  start_.from_input_model = true;
+  if (kind == SeedKind::kAdjusted) {
+    num_seed_images_ = seeded.size();
+    progress_->Increment(seeded.size());
+  }
   return true;
 }
 
@@ -119,64 +142,44 @@ bool ModelBuilder::ImagesLeftToRegister() const {
 }
 
 bool ModelBuilder::InitializeFromPair(image_pair_t pair_id, const TwoViewGeometry& geometry,
-                                      double min_angle_deg) {
+                                      const InitThresholds& thresholds, InitialPairLedger* ledger) {
   const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
   const Image& image1 = reconstruction_.GetImage(image_id1);
   const Image& image2 = reconstruction_.GetImage(image_id2);
-  const Camera& camera1 = reconstruction_.GetCamera(image1.camera_id);
-  const Camera& camera2 = reconstruction_.GetCamera(image2.camera_id);
-
-  std::vector<Eigen::Vector2d> points1, points2;
-  for (const FeatureMatch& match : geometry.inlier_matches) {
-    points1.push_back(camera1.CamFromImg(image1.points2D[match.point2D_idx1].xy));
-    points2.push_back(camera2.CamFromImg(image2.points2D[match.point2D_idx2].xy));
-  }
-  // Verification stores every accepted pair's relative pose (from E, F or H, whichever
-  // explains the pair); databases without one (COLMAP's before 3.7) get it from E here.
-  Rigid3d cam2_from_cam1 = geometry.cam2_from_cam1;
-  if (cam2_from_cam1.translation.isZero() || !cam2_from_cam1.translation.allFinite()) {
-    Eigen::Matrix3d E = geometry.E;
-    if (geometry.config != TwoViewGeometry::kCalibrated || E.isZero()) {
-      E = EssentialFromFundamental(geometry.F, camera1.CalibrationMatrix(),
-                                   camera2.CalibrationMatrix());
+  InitialPairEvaluation own_evaluation;
+  const InitialPairEvaluation* evaluation = &own_evaluation;
+  if (ledger != nullptr) {
+    auto it = ledger->evaluations.find(pair_id);
+    if (it == ledger->evaluations.end()) {
+      it = ledger->evaluations
+               .emplace(pair_id,
+                        EvaluateInitialPair(reconstruction_, pair_id, geometry,
+                                            options_.triangulation.max_reprojection_error_px))
+               .first;
     }
-    if (!E.allFinite() || !PoseFromEssentialMatrix(E, points1, points2, &cam2_from_cam1)) {
-      return false;
-    }
+    evaluation = &it->second;
+  } else {
+    own_evaluation = EvaluateInitialPair(reconstruction_, pair_id, geometry,
+                                         options_.triangulation.max_reprojection_error_px);
   }
-
-  // Count the matches that triangulate well under this pose.
-  const Matrix3x4d proj1 = Rigid3d().ToMatrix();
-  const Matrix3x4d proj2 = cam2_from_cam1.ToMatrix();
-  const Eigen::Vector3d center2 = ProjectionCenter(cam2_from_cam1);
-  const double max_error = options_.triangulation.max_reprojection_error_px;
-  std::vector<double> angles;
-  for (size_t i = 0; i < points1.size(); ++i) {
-    const auto xyz = TriangulatePoint(proj1, proj2, points1[i], points2[i]);
-    if (!xyz || xyz->z() <= 0 || (cam2_from_cam1 * *xyz).z() <= 0) continue;
-    const FeatureMatch& match = geometry.inlier_matches[i];
-    const double error1 =
-        (camera1.ImgFromCam(*xyz) - image1.points2D[match.point2D_idx1].xy).norm();
-    const double error2 =
-        (camera2.ImgFromCam(cam2_from_cam1 * *xyz) - image2.points2D[match.point2D_idx2].xy).norm();
-    if (error1 > max_error || error2 > max_error) continue;
-    angles.push_back(CalculateTriangulationAngle(Eigen::Vector3d::Zero(), center2, *xyz));
-  }
-  if (static_cast<int>(angles.size()) < options_.init_min_num_inliers) {
+  if (!evaluation->has_pose) return false;
+  if (evaluation->num_triangulated < thresholds.min_num_inliers) {
     PARALLAX_LOG(Debug) << "mapper: initial pair " << image1.name << " + " << image2.name << ": "
-                        << angles.size() << " of " << points1.size() << " inliers triangulate";
+                        << evaluation->num_triangulated << " of " << geometry.inlier_matches.size()
+                        << " inliers triangulate";
     return false;
   }
-  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
-  const double median_angle_deg = angles[angles.size() / 2] * 180.0 / M_PI;
-  if (median_angle_deg < min_angle_deg) {
+  if (evaluation->median_angle_deg < thresholds.min_angle_deg) {
     PARALLAX_LOG(Debug) << "mapper: initial pair " << image1.name << " + " << image2.name
-                        << ": median angle " << median_angle_deg << " deg, below " << min_angle_deg;
+                        << ": median angle " << evaluation->median_angle_deg << " deg, below "
+                        << thresholds.min_angle_deg;
     return false;
   }
+  // Tried once: a pair that fails from here on would fail again.
+  if (ledger != nullptr) ledger->started.insert(pair_id);
 
   reconstruction_.GetImage(image_id1).cam_from_world = Rigid3d();
-  reconstruction_.GetImage(image_id2).cam_from_world = cam2_from_cam1;
+  reconstruction_.GetImage(image_id2).cam_from_world = evaluation->cam2_from_cam1;
   reconstruction_.RegisterImage(image_id1);
   reconstruction_.RegisterImage(image_id2);
   init_image_id1_ = image_id1;
@@ -187,16 +190,28 @@ bool ModelBuilder::InitializeFromPair(image_pair_t pair_id, const TwoViewGeometr
         reconstruction_.MeanReprojectionErrorOfImage(image_id);
   }
   AdjustGlobalBundle();
-  if (static_cast<int>(reconstruction_.NumPoints3D()) < options_.init_min_num_inliers / 2) {
+  if (static_cast<int>(reconstruction_.NumPoints3D()) < thresholds.min_num_inliers / 2) {
     PARALLAX_LOG(Debug) << "mapper: initial pair " << image_id1 << "-" << image_id2
                         << " kept too few points after adjustment";
     reconstruction_.DeRegisterImage(image_id1);
     reconstruction_.DeRegisterImage(image_id2);
     return false;
   }
+  start_ = ModelStartReport();
+  start_.image_id1 = image_id1;
+  start_.image_id2 = image_id2;
+  start_.thresholds = thresholds;
+  start_.num_triangulated = evaluation->num_triangulated;
+  start_.median_angle_deg = evaluation->median_angle_deg;
+  const std::string relaxed =
+      thresholds.step == 0 ? ""
+                           : ", thresholds relaxed (step " + std::to_string(thresholds.step) +
+                                 ") to " + std::to_string(thresholds.min_num_inliers) +
+                                 " inliers and " + FormatDegrees(thresholds.min_angle_deg);
   PARALLAX_LOG(Info) << "mapper: initial pair " << image1.name << " + " << image2.name << " ("
                      << geometry.inlier_matches.size() << " inliers, median angle "
-                     << median_angle_deg << " deg, " << reconstruction_.NumPoints3D() << " points)";
+                     << evaluation->median_angle_deg << " deg, " << reconstruction_.NumPoints3D()
+                     << " points" << relaxed << ")";
   progress_->Increment(2);
   return true;
 }

@@ -7,6 +7,7 @@
 #include "parallax/estimators/bundle_adjustment.h"
 #include "parallax/scene/reconstruction.h"
 #include "parallax/sfm/incremental_mapper_options.h"
+#include "parallax/sfm/initial_pair.h"
 #include "parallax/sfm/mapper_input.h"
 #include "parallax/sfm/mapper_summary.h"
 #include "parallax/sfm/next_view.h"
@@ -42,20 +43,27 @@ class ModelBuilder {
   const TrackedReconstruction& Tracked() const { return model_; }
 
   // ----- Initialisation ---------------------------------------------------------------------
-  // Tries the verified pairs with at least init_min_num_inliers inliers, most inliers first,
-  // at the full triangulation-angle threshold, then at half and a quarter of it. False when
-  // no pair qualifies.
-  bool InitializeFromBestPair();
-  // Registers the two images of `pair_id` with the pair's relative pose (from E when the
-  // database stored none), triangulates their matches and adjusts both. False (nothing
-  // registered) when fewer than init_min_num_inliers matches triangulate, their median angle
-  // is below `min_angle_deg`, or too few points survive the adjustment.
+  // Walks InitThresholdSchedule: at each step, the verified pairs of unused images with at
+  // least that step's inliers, most inliers first (up to init_max_trials of them), until one
+  // starts the model. `ledger` (shared by the models of a run; none: one of its own) keeps
+  // each pair's evaluation and skips pairs an earlier model started from. False when no pair
+  // qualifies at any step.
+  bool InitializeFromBestPair(InitialPairLedger* ledger = nullptr);
+  // Registers the two images of `pair_id` with the pair's relative pose, triangulates their
+  // matches and adjusts both. False (nothing registered) when fewer than the thresholds'
+  // inliers triangulate, their median angle is below theirs, or fewer than half that many
+  // points survive the adjustment.
   bool InitializeFromPair(image_pair_t pair_id, const TwoViewGeometry& geometry,
-                          double min_angle_deg);
+                          const InitThresholds& thresholds, InitialPairLedger* ledger = nullptr);
+  // What a seed model is: a finished, adjusted model given by the user (its images counted
+  // as new registrations, a few photos added to it settled lightly: ExtendingSeed), or this
+  // run's models joined by JoinModels (counted already, and never adjusted as a whole: the
+  // full schedule follows).
+  enum class SeedKind { kAdjusted, kJoined };
   // Starts from the registered images of `seed` that this input holds and no earlier model
   // used, with the seed's poses and intrinsics; every track they see is triangulated anew.
   // False (and nothing registered) when fewer than two qualify.
-  bool InitializeFromModel(const Reconstruction& seed);
+  bool InitializeFromModel(const Reconstruction& seed, SeedKind kind = SeedKind::kAdjusted);
 
   // ----- Registration -----------------------------------------------------------------------
   // Unregistered images connected to the model, best first by visibility score, leaving out
@@ -66,6 +74,8 @@ class ModelBuilder {
   bool RegisterImage(image_t image_id, MapperImageReport* report);
   // Unregistered images left that no earlier model used.
   bool ImagesLeftToRegister() const;
+  // How the model started (set by a successful initialisation).
+  const ModelStartReport& Start() const { return start_; }
 
   // ----- Triangulation ----------------------------------------------------------------------
   // New points from the image's tracks, and the image's keypoints added to points they fit.
@@ -127,6 +137,7 @@ class ModelBuilder {
   size_t images_at_last_global_ba_ = 0;
   size_t points_at_last_global_ba_ = 0;
   size_t num_seed_images_ = 0;  // Registered from an input model (Extend).
+  ModelStartReport start_;
 };
 
 }  // namespace parallax

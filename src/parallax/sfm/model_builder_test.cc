@@ -62,10 +62,11 @@ TEST_F(ModelBuilderTest, InitializeFromBestPairRegistersTwoImagesAndTriangulates
 TEST_F(ModelBuilderTest, InitializeFromPairRefusesAnAngleAboveThePairs) {
   ModelBuilder builder = MakeBuilder();
   const auto& [pair_id, geometry] = *ring_.input.two_view_geometries.begin();
-  EXPECT_FALSE(builder.InitializeFromPair(pair_id, geometry, /*min_angle_deg=*/89.0));
+  EXPECT_FALSE(
+      builder.InitializeFromPair(pair_id, geometry, {options_.init_min_num_inliers, 89.0}));
   EXPECT_EQ(builder.Model().NumRegImages(), 0u);
   EXPECT_EQ(builder.Model().NumPoints3D(), 0u);
-  EXPECT_TRUE(builder.InitializeFromPair(pair_id, geometry, /*min_angle_deg=*/0.0));
+  EXPECT_TRUE(builder.InitializeFromPair(pair_id, geometry, {options_.init_min_num_inliers, 0.0}));
   EXPECT_EQ(builder.Model().NumRegImages(), 2u);
 }
 

@@ -64,20 +64,6 @@ class MergedObservations {
   std::unordered_map<uint64_t, Eigen::Vector3d> xyz_;
 };
 
-double MedianDistanceFromMedian(const std::vector<Eigen::Vector3d>& points) {
-  Eigen::Vector3d median;
-  for (int axis = 0; axis < 3; ++axis) {
-    std::vector<double> values;
-    for (const Eigen::Vector3d& point : points) values.push_back(point[axis]);
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    median[axis] = values[values.size() / 2];
-  }
-  std::vector<double> distances;
-  for (const Eigen::Vector3d& point : points) distances.push_back((point - median).norm());
-  std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
-  return distances[distances.size() / 2];
-}
-
 std::vector<image_t> SharedImages(const Reconstruction& model, const Reconstruction& merged) {
   std::vector<image_t> shared;
   for (const image_t image_id : model.RegImageIds()) {
@@ -107,6 +93,20 @@ ModelMergeReport EstimateMergedFromModel(const ModelMergerOptions& options,
 }
 
 }  // namespace
+
+double MedianDistanceFromMedian(const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Vector3d median;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> values;
+    for (const Eigen::Vector3d& point : points) values.push_back(point[axis]);
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    median[axis] = values[values.size() / 2];
+  }
+  std::vector<double> distances;
+  for (const Eigen::Vector3d& point : points) distances.push_back((point - median).norm());
+  std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
+  return distances[distances.size() / 2];
+}
 
 Reconstruction MergeModels(const ModelMergerOptions& options,
                            const std::vector<Reconstruction>& models,

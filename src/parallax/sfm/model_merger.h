@@ -46,4 +46,8 @@ Reconstruction MergeModels(const ModelMergerOptions& options,
                            const std::vector<Reconstruction>& models,
                            std::vector<ModelMergeReport>* reports = nullptr);
 
+// The median distance of the points from their per-axis median: a model's spread, for
+// thresholds that hold whatever its arbitrary scale.
+double MedianDistanceFromMedian(const std::vector<Eigen::Vector3d>& points);
+
 }  // namespace parallax
