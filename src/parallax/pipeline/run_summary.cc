@@ -123,11 +123,13 @@ nlohmann::json BuildRunSummary(const MappingStageResult& result, const StageTimi
       num_observations = result.models[report.model_index].GetImage(image_id).num_points3D;
     }
     entry["num_observations"] = num_observations;
+    if (report.registered_relaxed) entry["registered_at_relaxed_pnp_thresholds"] = true;
     entry["reprojection_error_before_ba_px"] = NumberOrNull(report.error_before_ba_px);
     entry["reprojection_error_after_ba_px"] = NumberOrNull(report.error_after_ba_px);
     if (report.model_index < 0) {
       entry["reason"] = report.reason;
       entry["registration_attempts"] = report.num_registration_trials;
+      entry["relaxed_registration_attempts"] = report.num_relaxed_registration_trials;
       entry["visible_points_at_last_attempt"] = report.num_visible_points;
       entry["pnp_inliers_at_last_attempt"] = report.num_pnp_inliers;
     }

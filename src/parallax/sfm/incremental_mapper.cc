@@ -85,7 +85,8 @@ bool RegisterNextImage(ModelBuilder* builder, MapperSummary* summary,
 // The paper's Algorithm 1 after initialisation: register the next best view (triangulating
 // and adjusting as it goes) until none registers; then one global adjustment and
 // re-triangulation may make room for more, unless every image is in or nothing changed
-// since the last; the final robust adjustment ends the model.
+// since the last; then a last pass at relaxed PnP bars; the final robust adjustment ends
+// the model.
 void GrowModel(ModelBuilder* builder, MapperSummary* summary) {
   std::map<image_t, int> trials;
   while (true) {
@@ -96,6 +97,12 @@ void GrowModel(ModelBuilder* builder, MapperSummary* summary) {
     if (RegisterNextImage(builder, summary, &trials)) continue;
     if (builder->ImagesLeftToRegister() && builder->GrewSinceGlobalAdjustment()) {
       builder->AdjustGlobalBundle();
+      trials.clear();
+      if (!builder->NextImages(trials).empty()) continue;
+    }
+    // The last pass: what is left, against lower bars.
+    if (!builder->RegistrationRelaxed() && builder->ImagesLeftToRegister()) {
+      builder->RelaxRegistration();
       trials.clear();
       if (!builder->NextImages(trials).empty()) continue;
     }

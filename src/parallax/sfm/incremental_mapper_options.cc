@@ -15,6 +15,9 @@ void IncrementalMapperOptions::Check() const {
   PARALLAX_CHECK_GE(absolute_pose_min_num_inliers, 3);
   PARALLAX_CHECK(absolute_pose_min_inlier_ratio >= 0 && absolute_pose_min_inlier_ratio <= 1);
   PARALLAX_CHECK_GE(max_registration_trials, 1);
+  PARALLAX_CHECK_GE(relaxed_absolute_pose_min_num_inliers, 3);
+  PARALLAX_CHECK(relaxed_absolute_pose_min_inlier_ratio >= 0 &&
+                 relaxed_absolute_pose_min_inlier_ratio <= 1);
   triangulation.Check();
   filter.Check();
   local_ba.Check();

@@ -29,6 +29,10 @@ struct IncrementalMapperOptions {
   int absolute_pose_min_num_inliers = 30;  // PnP inliers an image needs to be registered.
   double absolute_pose_min_inlier_ratio = 0.25;
   int max_registration_trials = 2;  // Failed attempts before an image is given up.
+  // The last pass, when nothing more registers: every image left is tried again with these
+  // lower bars (each attempt counted in its report), then the model is finished.
+  int relaxed_absolute_pose_min_num_inliers = 15;
+  double relaxed_absolute_pose_min_inlier_ratio = 0.15;
   // Triangulation and filtering.
   TrackTriangulationOptions triangulation;
   ObservationFilterOptions filter;

@@ -186,5 +186,52 @@ TEST(IncrementalMapper, UnrelatedImagesGiveNoModelAndReasons) {
   }
 }
 
+// An image that sees only 20 of the model's points misses the 30 PnP inliers registration
+// asks for; the last pass, at the relaxed 15, registers it and says so in its report.
+TEST(IncrementalMapper, TheLastPassRegistersAnImageBelowTheBarsAtRelaxedOnes) {
+  SyntheticDatasetOptions options;
+  options.num_images = 12;
+  options.num_points3D = 400;
+  options.min_track_length = 3;
+  options.seed = 4;
+  Reconstruction truth;
+  SynthesizeDataset(options, &truth);
+  const image_t sparse_image = 12;
+  std::vector<point2D_t> observed;
+  const Image& image = truth.GetImage(sparse_image);
+  for (point2D_t idx = 0; idx < image.points2D.size(); ++idx) {
+    if (image.points2D[idx].HasPoint3D()) observed.push_back(idx);
+  }
+  ASSERT_GT(observed.size(), 40u);
+  for (size_t i = 20; i < observed.size(); ++i) truth.DeleteObservation(sparse_image, observed[i]);
+  const MapperInput input = InputFromTruth(truth);
+
+  MapperSummary summary;
+  const std::vector<Reconstruction> models =
+      IncrementalMapper(IncrementalMapperOptions(), input).Reconstruct(&summary);
+  ASSERT_EQ(models.size(), 1u);
+  EXPECT_EQ(models[0].NumRegImages(), truth.NumRegImages());
+  const MapperImageReport& report = summary.images[sparse_image];
+  EXPECT_TRUE(report.registered_relaxed);
+  EXPECT_GE(report.num_relaxed_registration_trials, 1);
+  EXPECT_GT(report.num_registration_trials, report.num_relaxed_registration_trials);
+  for (const auto& [image_id, other] : summary.images) {
+    if (image_id != sparse_image) EXPECT_FALSE(other.registered_relaxed) << image_id;
+  }
+  EXPECT_LT(CompareToTruth(models[0], truth).max_rotation_deg, 1e-6);
+
+  // Relaxed bars no lower than the usual ones: the image stays out, its retries counted.
+  IncrementalMapperOptions strict;
+  strict.relaxed_absolute_pose_min_num_inliers = strict.absolute_pose_min_num_inliers;
+  const std::vector<Reconstruction> without =
+      IncrementalMapper(strict, input).Reconstruct(&summary);
+  ASSERT_EQ(without.size(), 1u);
+  EXPECT_EQ(without[0].NumRegImages(), truth.NumRegImages() - 1);
+  EXPECT_EQ(summary.images[sparse_image].model_index, -1);
+  EXPECT_GE(summary.images[sparse_image].num_relaxed_registration_trials, 1);
+  EXPECT_NE(summary.images[sparse_image].reason.find("relaxed"), std::string::npos)
+      << summary.images[sparse_image].reason;
+}
+
 }  // namespace
 }  // namespace parallax

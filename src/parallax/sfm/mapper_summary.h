@@ -49,7 +49,9 @@ struct MapperImageReport {
   int model_index = -1;  // Index into the returned models; -1 when not registered.
   std::string reason;    // Why it ended unregistered (empty when registered).
   int num_registration_trials = 0;
-  size_t num_visible_points = 0;  // 2D-3D correspondences at the last attempt.
+  int num_relaxed_registration_trials = 0;  // Of those, in the last pass with lower bars.
+  bool registered_relaxed = false;          // Registered in that pass.
+  size_t num_visible_points = 0;            // 2D-3D correspondences at the last attempt.
   size_t num_pnp_inliers = 0;
   // Mean reprojection error right after registration and triangulation (before any bundle
   // adjustment that includes the image) and in the final model.

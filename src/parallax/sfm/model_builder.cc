@@ -291,10 +291,17 @@ bool ModelBuilder::EstimatePoseAndRegister(image_t image_id, MapperImageReport* 
     }
   }
   report->num_visible_points = points2D.size();
-  const size_t min_inliers = static_cast<size_t>(options_.absolute_pose_min_num_inliers);
+  const size_t min_inliers =
+      static_cast<size_t>(relaxed_registration_ ? options_.relaxed_absolute_pose_min_num_inliers
+                                                : options_.absolute_pose_min_num_inliers);
+  const double min_inlier_ratio = relaxed_registration_
+                                      ? options_.relaxed_absolute_pose_min_inlier_ratio
+                                      : options_.absolute_pose_min_inlier_ratio;
+  if (relaxed_registration_) ++report->num_relaxed_registration_trials;
   if (points2D.size() < min_inliers) {
     report->reason = "too few 2D-3D correspondences: " + std::to_string(points2D.size()) +
-                     " (need " + std::to_string(min_inliers) + ")";
+                     " (need " + std::to_string(min_inliers) +
+                     (relaxed_registration_ ? ", relaxed)" : ")");
     return false;
   }
   // One seed per image (and attempt), derived from the mapper's: the same run registers the
@@ -306,12 +313,12 @@ bool ModelBuilder::EstimatePoseAndRegister(image_t image_id, MapperImageReport* 
   const AbsolutePoseReport pose = EstimateAbsolutePose(camera, points2D, points3D, pose_options);
   report->num_pnp_inliers = pose.num_inliers;
   const double inlier_ratio = static_cast<double>(pose.num_inliers) / points2D.size();
-  if (!pose.success || pose.num_inliers < min_inliers ||
-      inlier_ratio < options_.absolute_pose_min_inlier_ratio) {
+  if (!pose.success || pose.num_inliers < min_inliers || inlier_ratio < min_inlier_ratio) {
     report->reason = "PnP inliers below the bar: " + std::to_string(pose.num_inliers) + " of " +
                      std::to_string(points2D.size()) + " correspondences (need " +
                      std::to_string(min_inliers) + " and ratio " +
-                     std::to_string(options_.absolute_pose_min_inlier_ratio) + ")";
+                     std::to_string(min_inlier_ratio) +
+                     (relaxed_registration_ ? ", relaxed)" : ")");
     return false;
   }
   Rigid3d cam_from_world = pose.cam_from_world;
@@ -333,6 +340,7 @@ bool ModelBuilder::EstimatePoseAndRegister(image_t image_id, MapperImageReport* 
   TriangulateImage(image_id);
   progress_->Increment();
   report->reason.clear();
+  report->registered_relaxed = relaxed_registration_;
   report->error_before_ba_px = reconstruction_.MeanReprojectionErrorOfImage(image_id);
   PARALLAX_LOG(Debug) << "mapper: registered " << image.name << " (" << pose.num_inliers << "/"
                       << points2D.size() << " PnP inliers, " << reconstruction_.NumRegImages()

@@ -72,6 +72,10 @@ class ModelBuilder {
   // PnP RANSAC on the image's 2D-3D correspondences, pose refinement, observations of the
   // inliers, then TriangulateImage. False, with `report->reason`, when any bar is not met.
   bool RegisterImage(image_t image_id, MapperImageReport* report);
+  // From now on, registration holds images to the relaxed PnP bars
+  // (relaxed_absolute_pose_min_num_inliers and _ratio): the last pass.
+  void RelaxRegistration() { relaxed_registration_ = true; }
+  bool RegistrationRelaxed() const { return relaxed_registration_; }
   // Unregistered images left that no earlier model used.
   bool ImagesLeftToRegister() const;
   // How the model started (set by a successful initialisation).
@@ -138,6 +142,7 @@ class ModelBuilder {
   size_t points_at_last_global_ba_ = 0;
   size_t num_seed_images_ = 0;  // Registered from an input model (Extend).
   ModelStartReport start_;
+  bool relaxed_registration_ = false;
 };
 
 }  // namespace parallax
