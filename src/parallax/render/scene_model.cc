@@ -51,6 +51,8 @@ inline bool SlabTest(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& orig
 void SceneModelOptions::Check() const {
   PARALLAX_CHECK_GE(num_temples, 1);
   PARALLAX_CHECK_GT(temple_spacing, 2 * kPlazaHalfX * 0.7);
+  PARALLAX_CHECK_GE(num_rows, 1);
+  PARALLAX_CHECK_GT(row_spacing, 2 * kSteps[0][1]);  // Rows may share a plaza, not overlap.
   PARALLAX_CHECK_GT(town_half_size, 0.0);
 }
 
@@ -59,12 +61,14 @@ SceneModel::SceneModel(const SceneModelOptions& options) : options_(options) {
   next_texture_seed_ = static_cast<uint32_t>(options_.seed * 0x9E3779B97F4A7C15ull >> 32) ^
                        static_cast<uint32_t>(options_.seed);
   layout_seed_ = Mix32(next_texture_seed_ ^ 0x7A3B9C1Du);
+  first_texture_seed_ = next_texture_seed_;
   if (options_.kind == SceneModelOptions::Kind::kTown) {
     options_.num_temples = 1;  // The ground disc is centred on temple 0's place, the origin.
+    options_.num_rows = 1;
     AddTown();
     ground_radius_ = std::sqrt(2.0) * options_.town_half_size + 300.0;
   } else {
-    for (int k = 0; k < options_.num_temples; ++k) AddTemple(k);
+    for (int k = 0; k < NumTemples(); ++k) AddTemple(k);
     ground_radius_ = 0.5 * (options_.num_temples - 1) * options_.temple_spacing + 250.0;
   }
   bounds_.setEmpty();
@@ -140,20 +144,28 @@ std::vector<SurfacePoint> SceneModel::SampleSurfacePoints(double spacing,
 }
 
 Eigen::Vector3d SceneModel::TempleCenter(int temple_idx) const {
-  return Eigen::Vector3d(temple_idx * options_.temple_spacing, 0.0, 0.0);
+  const int row = temple_idx / options_.num_temples;
+  return Eigen::Vector3d((temple_idx % options_.num_temples) * options_.temple_spacing,
+                         row * options_.row_spacing, 0.0);
 }
 
 void SceneModel::AddTemple(int temple_idx) {
   const Eigen::Vector3d c = TempleCenter(temple_idx);
+  // A copy of temple 0: the same seeds, in the same order, textured from its own centre.
+  const bool copy = options_.identical_temples;
+  if (copy) next_texture_seed_ = first_texture_seed_;
+  const Eigen::Vector3d uv_origin = copy ? c : Eigen::Vector3d::Zero();
+  const auto add_box = [&](const Eigen::Vector3d& min, const Eigen::Vector3d& max,
+                           Material material) { AddBox(min, max, material, uv_origin); };
   double z = 0.0;
   for (const auto& [half_x, half_y, top] : kSteps) {
-    AddBox(c + Eigen::Vector3d(-half_x, -half_y, z), c + Eigen::Vector3d(half_x, half_y, top),
-           Material::kStone);
+    add_box(c + Eigen::Vector3d(-half_x, -half_y, z), c + Eigen::Vector3d(half_x, half_y, top),
+            Material::kStone);
     z = top;
   }
   // The cella: a walled room inside the peristyle.
-  AddBox(c + Eigen::Vector3d(-3.2, -1.8, kFloor), c + Eigen::Vector3d(3.2, 1.8, kArchitraveBottom),
-         Material::kWall);
+  add_box(c + Eigen::Vector3d(-3.2, -1.8, kFloor), c + Eigen::Vector3d(3.2, 1.8, kArchitraveBottom),
+          Material::kWall);
   // Peristyle: 6 columns on each long side, 2 more on each short side.
   std::vector<Eigen::Vector2d> columns;
   for (int i = 0; i < 6; ++i) {
@@ -166,14 +178,15 @@ void SceneModel::AddTemple(int temple_idx) {
   }
   for (const Eigen::Vector2d& xy : columns) {
     const Eigen::Vector3d base = c + Eigen::Vector3d(xy.x(), xy.y(), 0.0);
-    AddBox(base + Eigen::Vector3d(-0.45, -0.45, kFloor),
-           base + Eigen::Vector3d(0.45, 0.45, kPlinthTop), Material::kStone);
+    add_box(base + Eigen::Vector3d(-0.45, -0.45, kFloor),
+            base + Eigen::Vector3d(0.45, 0.45, kPlinthTop), Material::kStone);
+    // Column textures run around the axis and up: the same on every copy.
     AddCylinder(base.head<2>(), kColumnRadius, kPlinthTop, kCapitalBottom, Material::kColumn);
-    AddBox(base + Eigen::Vector3d(-0.48, -0.48, kCapitalBottom),
-           base + Eigen::Vector3d(0.48, 0.48, kArchitraveBottom), Material::kStone);
+    add_box(base + Eigen::Vector3d(-0.48, -0.48, kCapitalBottom),
+            base + Eigen::Vector3d(0.48, 0.48, kArchitraveBottom), Material::kStone);
   }
-  AddBox(c + Eigen::Vector3d(-5.5, -3.5, kArchitraveBottom),
-         c + Eigen::Vector3d(5.5, 3.5, kArchitraveTop), Material::kStone);
+  add_box(c + Eigen::Vector3d(-5.5, -3.5, kArchitraveBottom),
+          c + Eigen::Vector3d(5.5, 3.5, kArchitraveTop), Material::kStone);
   // Gabled roof: two slopes with a ridge along x, and a pediment at each end.
   const double ridge = kTempleHeight, eave_y = 3.7, eave_x = 5.7;
   for (const double side : {-1.0, 1.0}) {
@@ -181,15 +194,16 @@ void SceneModel::AddTemple(int temple_idx) {
     const Eigen::Vector3d b = c + Eigen::Vector3d(eave_x, side * eave_y, kArchitraveTop);
     const Eigen::Vector3d r1 = c + Eigen::Vector3d(-eave_x, 0.0, ridge);
     const Eigen::Vector3d r2 = c + Eigen::Vector3d(eave_x, 0.0, ridge);
-    AddTriangle(a, b, r2, Eigen::Vector3d::UnitX(), Material::kRoof);
-    AddTriangle(a, r2, r1, Eigen::Vector3d::UnitX(), Material::kRoof);
+    AddTriangle(a, b, r2, Eigen::Vector3d::UnitX(), Material::kRoof, uv_origin);
+    AddTriangle(a, r2, r1, Eigen::Vector3d::UnitX(), Material::kRoof, uv_origin);
     const double x = side * 5.5;
-    AddTriangle(
-        c + Eigen::Vector3d(x, -3.5, kArchitraveTop), c + Eigen::Vector3d(x, 3.5, kArchitraveTop),
-        c + Eigen::Vector3d(x, 0.0, ridge - 0.12), Eigen::Vector3d::UnitY(), Material::kStone);
+    AddTriangle(c + Eigen::Vector3d(x, -3.5, kArchitraveTop),
+                c + Eigen::Vector3d(x, 3.5, kArchitraveTop),
+                c + Eigen::Vector3d(x, 0.0, ridge - 0.12), Eigen::Vector3d::UnitY(),
+                Material::kStone, uv_origin);
   }
   // A few blocks (altars, pedestals, a stele) on the plaza, placed from the seed.
-  uint32_t h = Mix32(next_texture_seed_ ^ (0x51ED27u * (temple_idx + 1)));
+  uint32_t h = Mix32(next_texture_seed_ ^ (0x51ED27u * ((copy ? 0 : temple_idx) + 1)));
   for (int i = 0; i < 5; ++i) {
     const double angle = 2.0 * std::numbers::pi * (i + 0.6 * UnitFloat(h = Mix32(h))) / 5.0;
     const double distance = 8.0 + 2.0 * UnitFloat(h = Mix32(h));
@@ -198,9 +212,9 @@ void SceneModel::AddTemple(int temple_idx) {
     const double half_x = 0.3 + 0.6 * UnitFloat(h = Mix32(h));
     const double half_y = 0.3 + 0.6 * UnitFloat(h = Mix32(h));
     const double height = 0.5 + 2.0 * UnitFloat(h = Mix32(h));
-    AddBox(center + Eigen::Vector3d(-half_x, -half_y, 0.0),
-           center + Eigen::Vector3d(half_x, half_y, height),
-           i % 2 == 0 ? Material::kStone : Material::kWall);
+    add_box(center + Eigen::Vector3d(-half_x, -half_y, 0.0),
+            center + Eigen::Vector3d(half_x, half_y, height),
+            i % 2 == 0 ? Material::kStone : Material::kWall);
   }
 }
 
@@ -294,12 +308,14 @@ Eigen::Vector3f SceneModel::TownGroundAlbedo(const SurfaceHit& hit, float footpr
   return EarthAlbedo(hit.uv.cast<float>(), hit.texture_seed, footprint);
 }
 
-void SceneModel::AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Material material) {
+void SceneModel::AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Material material,
+                        const Eigen::Vector3d& uv_origin) {
   Primitive primitive;
   primitive.shape = Shape::kBox;
   primitive.material = material;
   primitive.texture_seed = Mix32(next_texture_seed_++);
   primitive.box = Eigen::AlignedBox3d(min, max);
+  primitive.uv_origin = uv_origin;
   primitives_.push_back(primitive);
 }
 
@@ -397,7 +413,7 @@ bool SceneModel::IntersectPrimitive(const Primitive& primitive, const Eigen::Vec
       if (hit == nullptr) return true;
       normal = Eigen::Vector3d::Zero();
       normal[axis] = direction[axis] > 0 ? -1.0 : 1.0;
-      const Eigen::Vector3d point = origin + t * direction;
+      const Eigen::Vector3d point = (origin + t * direction) - primitive.uv_origin;
       uv = axis == 0 ? Eigen::Vector2d(point.y(), point.z())
                      : (axis == 1 ? Eigen::Vector2d(point.x(), point.z())
                                   : Eigen::Vector2d(point.x(), point.y()));
@@ -508,8 +524,7 @@ bool SceneModel::Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d&
     const double t = -origin.z() / direction.z();
     const Eigen::Vector3d point = origin + t * direction;
     const Eigen::Vector2d from_middle =
-        point.head<2>() -
-        0.5 * (TempleCenter(0) + TempleCenter(options_.num_temples - 1)).head<2>();
+        point.head<2>() - 0.5 * (TempleCenter(0) + TempleCenter(NumTemples() - 1)).head<2>();
     if (t < best && from_middle.norm() < ground_radius_) {
       best = t;
       found = true;
@@ -547,7 +562,10 @@ Eigen::Vector3f SceneModel::Albedo(const SurfaceHit& hit, double footprint) cons
       const int nearest =
           std::clamp(static_cast<int>(std::lround(hit.point.x() / options_.temple_spacing)), 0,
                      options_.num_temples - 1);
-      const Eigen::Vector3d local = hit.point - TempleCenter(nearest);
+      const int row =
+          std::clamp(static_cast<int>(std::lround(hit.point.y() / options_.row_spacing)), 0,
+                     options_.num_rows - 1);
+      const Eigen::Vector3d local = hit.point - TempleCenter(row * options_.num_temples + nearest);
       const bool paved = std::abs(local.x()) < kPlazaHalfX && std::abs(local.y()) < kPlazaHalfY;
       return paved ? PavingAlbedo(p, hit.texture_seed, fp) : EarthAlbedo(p, hit.texture_seed, fp);
     }

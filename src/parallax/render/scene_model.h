@@ -24,6 +24,15 @@ struct SceneModelOptions {
   int num_temples = 1;
   // Distance in metres between the centres of neighbouring temples.
   double temple_spacing = 18.0;
+  // kTemples: rows of num_temples each, row r along +x at y = r * row_spacing (two rows face
+  // each other across a street).
+  int num_rows = 1;
+  // Distance in metres between the centre lines of neighbouring rows.
+  double row_spacing = 30.0;
+  // kTemples: every temple a copy of the first (geometry, textures and blocks), textured in its
+  // own frame, so that only the ground around each (textured in world coordinates) tells them
+  // apart: repeated structure that can fold a reconstruction.
+  bool identical_temples = false;
   // Seed of the textures and of the small blocks scattered around each temple.
   uint64_t seed = 0;
 
@@ -54,7 +63,8 @@ struct SurfaceHit {
 // a large ground plane (z = 0) and, per temple, a three-step base, a cella (a walled box), a
 // peristyle of columns with plinths and capitals, an architrave slab and a gabled roof, plus
 // a few stone blocks around it. Temple k is centred at (k * temple_spacing, 0, 0), about
-// 12 m long (x), 8 m wide (y) and 7.4 m high. Textures are deterministic functions of the
+// 12 m long (x), 8 m wide (y) and 7.4 m high; a second row, if any, stands row_spacing
+// further along +y. Textures are deterministic functions of the
 // surface point and the seed, rich from metres down to centimetres (fractal value noise,
 // blocks, veins, speckles) so that SIFT finds stable keypoints on every surface; they fade
 // detail finer than the pixel footprint (anti-aliasing and speed).
@@ -89,7 +99,9 @@ class SceneModel {
                                                 uint64_t seed) const;
 
   const SceneModelOptions& Options() const { return options_; }
-  // Centre of temple k at ground level.
+  // Number of temples in all rows.
+  int NumTemples() const { return options_.num_temples * options_.num_rows; }
+  // Centre of temple k at ground level: k % num_temples along its row, row k / num_temples.
   Eigen::Vector3d TempleCenter(int temple_idx) const;
   // Height of the ridge of the roof.
   static constexpr double kTempleHeight = 7.4;
@@ -110,12 +122,13 @@ class SceneModel {
     // kCylinder: vertical axis through (center.x, center.y) from box.min.z to box.max.z.
     Eigen::Vector2d center = Eigen::Vector2d::Zero();
     double radius = 0.0;
+    // kBox and kTriangle: where texture coordinates are 0 (a copy of a box looks the same).
+    Eigen::Vector3d uv_origin = Eigen::Vector3d::Zero();
     // kTriangle: vertex, edges, unit normal and texture axes (unit, in the plane).
     Eigen::Vector3d vertex = Eigen::Vector3d::Zero();
     Eigen::Vector3d edge1 = Eigen::Vector3d::Zero(), edge2 = Eigen::Vector3d::Zero();
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     Eigen::Vector3d axis_u = Eigen::Vector3d::Zero(), axis_v = Eigen::Vector3d::Zero();
-    Eigen::Vector3d uv_origin = Eigen::Vector3d::Zero();
   };
   // A bounding volume hierarchy node: an inner node has two children, a leaf a range.
   struct Node {
@@ -129,7 +142,9 @@ class SceneModel {
   // Whether town block (bx, by) is a field rather than built on.
   bool IsFieldBlock(int bx, int by) const;
   Eigen::Vector3f TownGroundAlbedo(const SurfaceHit& hit, float footprint) const;
-  void AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Material material);
+  // Texture coordinates are those of the point less `uv_origin`.
+  void AddBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Material material,
+              const Eigen::Vector3d& uv_origin = Eigen::Vector3d::Zero());
   void AddCylinder(const Eigen::Vector2d& center, double radius, double z_min, double z_max,
                    Material material);
   // Texture u runs along `u_direction` projected into the triangle's plane, from
@@ -153,6 +168,8 @@ class SceneModel {
   Eigen::AlignedBox3d bounds_;
   double ground_radius_ = 0.0;
   uint32_t next_texture_seed_ = 0;
+  // next_texture_seed_ before the first temple: identical temples all start from it.
+  uint32_t first_texture_seed_ = 0;
   // Fixed at construction (unlike next_texture_seed_): where the town's fields and houses are.
   uint32_t layout_seed_ = 0;
 };

@@ -68,6 +68,108 @@ TEST(SceneModel, RowOfTemples) {
   EXPECT_THROW(SceneModel{options}, CheckError);
 }
 
+TEST(SceneModel, TwoRowsFaceEachOtherAcrossAStreet) {
+  SceneModelOptions options;
+  options.num_temples = 3;
+  options.num_rows = 2;
+  options.row_spacing = 24.0;
+  const SceneModel street(options);
+  EXPECT_EQ(street.NumTemples(), 6);
+  EXPECT_EQ(street.NumPrimitives(), 6 * SceneModel().NumPrimitives());
+  EXPECT_EQ(street.TempleCenter(2), Eigen::Vector3d(2 * options.temple_spacing, 0, 0));
+  EXPECT_EQ(street.TempleCenter(4), Eigen::Vector3d(options.temple_spacing, 24.0, 0));
+  SurfaceHit hit;
+  for (int k = 0; k < street.NumTemples(); ++k) {
+    ASSERT_TRUE(street.Intersect(street.TempleCenter(k) + Eigen::Vector3d(0, 0, 20),
+                                 -Eigen::Vector3d::UnitZ(), 1e9, &hit));
+    EXPECT_EQ(hit.material, Material::kRoof);
+  }
+  // Down the middle of the street the way is clear, between the rows' facades.
+  EXPECT_FALSE(
+      street.Intersect(Eigen::Vector3d(-10, 12, 1.6), Eigen::Vector3d::UnitX(), 1e9, &hit));
+  // Looking across, a temple of each row (or a block on its plaza).
+  ASSERT_TRUE(street.Intersect(Eigen::Vector3d(1, 12, 3.0), -Eigen::Vector3d::UnitY(), 1e9, &hit));
+  EXPECT_GT(hit.point.y(), 1.7);
+  EXPECT_LT(hit.point.y(), 9.0);
+  ASSERT_TRUE(street.Intersect(Eigen::Vector3d(1, 12, 3.0), Eigen::Vector3d::UnitY(), 1e9, &hit));
+  EXPECT_GT(hit.point.y(), 24.0 - 9.0);
+  EXPECT_LT(hit.point.y(), 24.0 - 1.7);
+  options.row_spacing = 5.0;
+  EXPECT_THROW(SceneModel{options}, CheckError);
+}
+
+// Surfaces seen straight down over the temples' plazas, at the same offsets from temple 0
+// and temple 1: how many are the same surface (material and height) with the same albedo, on
+// the ground and off it.
+struct CopyComparison {
+  int num_buildings = 0, num_buildings_same = 0;
+  int num_ground = 0, num_ground_same = 0;
+  int num_shapes_differ = 0;
+};
+
+CopyComparison CompareTemples(const SceneModel& scene) {
+  CopyComparison comparison;
+  const Eigen::Vector3d offset = scene.TempleCenter(1) - scene.TempleCenter(0);
+  SurfaceHit hit0, hit1;
+  for (double x = -10.9; x < 11; x += 0.37) {
+    for (double y = -8.4; y < 8.5; y += 0.41) {
+      const Eigen::Vector3d origin(x, y, 20);
+      if (!scene.Intersect(origin, -Eigen::Vector3d::UnitZ(), 1e9, &hit0) ||
+          !scene.Intersect(origin + offset, -Eigen::Vector3d::UnitZ(), 1e9, &hit1)) {
+        ADD_FAILURE() << "no hit at " << x << ", " << y;
+        continue;
+      }
+      if (hit0.material != hit1.material || std::abs(hit0.distance - hit1.distance) > 1e-9) {
+        ++comparison.num_shapes_differ;
+        continue;
+      }
+      const bool same = (scene.Albedo(hit0, 0.005) - scene.Albedo(hit1, 0.005)).norm() < 1e-4;
+      if (hit0.material == Material::kGround) {
+        ++comparison.num_ground;
+        comparison.num_ground_same += same;
+      } else {
+        ++comparison.num_buildings;
+        comparison.num_buildings_same += same;
+      }
+    }
+  }
+  return comparison;
+}
+
+TEST(SceneModel, IdenticalTemplesDifferOnlyInTheirGround) {
+  SceneModelOptions options;
+  options.num_temples = 2;
+  options.temple_spacing = 36.0;
+  options.identical_temples = true;
+  options.seed = 3;
+  const CopyComparison twins = CompareTemples(SceneModel(options));
+  // Temples, steps and blocks: the same shapes in the same places, textured alike.
+  EXPECT_EQ(twins.num_shapes_differ, 0);
+  EXPECT_GT(twins.num_buildings, 500);
+  EXPECT_EQ(twins.num_buildings_same, twins.num_buildings);
+  // The plaza and the earth around them are not copies.
+  EXPECT_GT(twins.num_ground, 300);
+  EXPECT_LT(twins.num_ground_same, twins.num_ground / 20);
+  // From the side too: the colonnade and the cella behind it.
+  const SceneModel scene(options);
+  SurfaceHit hit0, hit1;
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector3d origin(-3.0 + 0.1 * i, -15.0, 1.0 + 0.06 * i);
+    ASSERT_TRUE(scene.Intersect(origin, Eigen::Vector3d::UnitY(), 1e9, &hit0));
+    ASSERT_TRUE(scene.Intersect(origin + Eigen::Vector3d(36.0, 0, 0), Eigen::Vector3d::UnitY(), 1e9,
+                                &hit1));
+    EXPECT_EQ(hit0.material, hit1.material);
+    EXPECT_LT((scene.Albedo(hit0, 0.005) - scene.Albedo(hit1, 0.005)).norm(), 1e-4) << i;
+  }
+
+  // Without the option the second temple is its own (and the blocks stand elsewhere).
+  options.identical_temples = false;
+  const CopyComparison row = CompareTemples(SceneModel(options));
+  EXPECT_GT(row.num_shapes_differ, 0);
+  // (Mortar joints are one colour on every surface: those few points match anyway.)
+  EXPECT_LT(row.num_buildings_same, row.num_buildings / 3);
+}
+
 // Standard deviation of the luminance difference between points `step` metres apart.
 double TextureContrast(const SceneModel& scene, Material material, double step, double footprint) {
   SurfaceHit hit;
