@@ -188,9 +188,10 @@ void BindTools(py::module_& m) {
         py::arg("name") = defaults.name, py::arg("threads") = defaults.num_threads,
         py::arg("progress") = py::none(),
         "Renders a synthetic scene with exact cameras into output_dir, as `parallax synth`: "
-        "layout 'ring', 'hemisphere', 'sequence' or 'aerial'; image_size=(w, h) sets width "
-        "and height. Writes the images, <name>_par.txt, K.txt and gt/ (aerial: "
-        "gt/overlap_pairs.txt). Returns the exact views as a Reconstruction.");
+        "layout 'ring', 'hemisphere', 'sequence', 'aerial' or a hard scene, 'street', 'twin' "
+        "or 'weak'; image_size=(w, h) sets width and height. Writes the images, "
+        "<name>_par.txt, K.txt and gt/ (aerial and the hard scenes: gt/overlap_pairs.txt). "
+        "Returns the exact views as a Reconstruction.");
   m.def("calibrate", &Calibrate, py::arg("image_dir"), py::arg("pattern"), py::kw_only(),
         py::arg("square") = 1.0, py::arg("output") = py::none(), py::arg("size") = py::none(),
         py::arg("k3") = false, py::arg("sector_based") = false, py::arg("threads") = -1,

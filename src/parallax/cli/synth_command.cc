@@ -21,10 +21,16 @@ int RunSynth(int argc, char** argv) {
       ->check(CLI::Range(2, 100000));
   app.add_option("--layout", layout,
                  "ring (around one temple), hemisphere (a spiral above it), sequence (a walk "
-                 "past a row of temples, for sequential matching) or aerial (a drone survey of a "
-                 "town in strips: JPEG with EXIF focal length and GPS, gt/overlap_pairs.txt)")
+                 "past a row of temples, for sequential matching), aerial (a drone survey of a "
+                 "town in strips: JPEG with EXIF focal length and GPS, gt/overlap_pairs.txt), "
+                 "or a hard scene (with gt/overlap_pairs.txt): street (walking down a street "
+                 "between two rows of temples, looking forward at eye height: small "
+                 "triangulation angles), twin (an orbit around two identical temples on "
+                 "different ground: repeated structure) or weak (arcs around two temples joined "
+                 "by 2 to 4 views that see both: a barely linked view graph)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"ring", "hemisphere", "sequence", "aerial"}));
+      ->check(
+          CLI::IsMember({"ring", "hemisphere", "sequence", "aerial", "street", "twin", "weak"}));
   app.add_option("--oblique", options.oblique_fraction,
                  "aerial: share of the views tilted 30 degrees off nadir")
       ->capture_default_str()

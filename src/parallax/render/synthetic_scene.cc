@@ -12,6 +12,7 @@
 #include "parallax/geometry/look_at.h"
 #include "parallax/image/image_codecs.h"
 #include "parallax/render/covisibility.h"
+#include "parallax/render/hard_layouts.h"
 #include "parallax/render/procedural_texture.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -110,6 +111,12 @@ std::vector<Rigid3d> AerialSurveyPoses(const SyntheticSceneOptions& options, dou
   return poses;
 }
 
+bool IsHardLayout(SyntheticSceneOptions::Layout layout) {
+  return layout == SyntheticSceneOptions::Layout::kStreet ||
+         layout == SyntheticSceneOptions::Layout::kTwin ||
+         layout == SyntheticSceneOptions::Layout::kWeak;
+}
+
 std::string ViewName(int view_idx, bool aerial) {
   char name[32];
   std::snprintf(name, sizeof(name), aerial ? "IMG_%05d.jpg" : "view_%04d.png", view_idx + 1);
@@ -170,7 +177,11 @@ SyntheticSceneOptions::Layout SyntheticSceneLayoutFromName(const std::string& na
   if (name == "hemisphere") return SyntheticSceneOptions::Layout::kHemisphere;
   if (name == "sequence") return SyntheticSceneOptions::Layout::kSequence;
   if (name == "aerial") return SyntheticSceneOptions::Layout::kAerial;
-  throw InputError("unknown layout '" + name + "' (expected ring, hemisphere, sequence or aerial)");
+  if (name == "street") return SyntheticSceneOptions::Layout::kStreet;
+  if (name == "twin") return SyntheticSceneOptions::Layout::kTwin;
+  if (name == "weak") return SyntheticSceneOptions::Layout::kWeak;
+  throw InputError("unknown layout '" + name +
+                   "' (expected ring, hemisphere, sequence, aerial, street, twin or weak)");
 }
 
 Antialiasing AntialiasingFromName(const std::string& name) {
@@ -181,6 +192,16 @@ Antialiasing AntialiasingFromName(const std::string& name) {
 }
 
 SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& options) {
+  switch (options.layout) {
+    case SyntheticSceneOptions::Layout::kStreet:
+      return StreetSceneOptions(options);
+    case SyntheticSceneOptions::Layout::kTwin:
+      return TwinSceneOptions(options);
+    case SyntheticSceneOptions::Layout::kWeak:
+      return WeakSceneOptions(options);
+    default:
+      break;
+  }
   SceneModelOptions scene_options;
   scene_options.seed = options.seed;
   if (options.layout == SyntheticSceneOptions::Layout::kSequence) {
@@ -233,6 +254,22 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
     }
     return views;
   }
+  if (IsHardLayout(options.layout)) {
+    const std::vector<Rigid3d> poses =
+        options.layout == SyntheticSceneOptions::Layout::kStreet ? StreetWalkPoses(options, &engine)
+        : options.layout == SyntheticSceneOptions::Layout::kTwin ? TwinOrbitPoses(options, &engine)
+                                                                 : WeakLinkPoses(options, &engine);
+    for (int i = 0; i < n; ++i) {
+      Image image;
+      image.image_id = static_cast<image_t>(i + 1);
+      image.camera_id = 1;
+      image.name = ViewName(i, /*aerial=*/false);
+      image.cam_from_world = poses[i];
+      views.AddImage(std::move(image));
+      views.RegisterImage(static_cast<image_t>(i + 1));
+    }
+    return views;
+  }
   for (int i = 0; i < n; ++i) {
     Eigen::Vector3d center = Eigen::Vector3d::Zero();
     Eigen::Vector3d target = Eigen::Vector3d::Zero();
@@ -259,6 +296,9 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
         break;
       }
       case SyntheticSceneOptions::Layout::kAerial:
+      case SyntheticSceneOptions::Layout::kStreet:
+      case SyntheticSceneOptions::Layout::kTwin:
+      case SyntheticSceneOptions::Layout::kWeak:
         break;  // Returned above.
       case SyntheticSceneOptions::Layout::kSequence: {
         // Walking past the row, the gaze swinging slowly forwards and backwards.
@@ -397,7 +437,7 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
               "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
               "# Number of points: 0, mean track length: 0\n";
   });
-  if (aerial) {
+  if (aerial || IsHardLayout(options.layout)) {
     const Timer covisibility_timer;
     CovisibilityOptions covisibility_options;
     covisibility_options.seed = options.seed;
@@ -416,8 +456,7 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
   }
   PARALLAX_LOG(Info) << "synthetic scene: " << views.NumImages() << " views of " << options.width
                      << "x" << options.height << " in " << output_dir.string() << " ("
-                     << scene.Options().num_temples << " temple(s), " << timer.ElapsedSeconds()
-                     << " s)";
+                     << scene.NumTemples() << " temple(s), " << timer.ElapsedSeconds() << " s)";
   return views;
 }
 

@@ -19,6 +19,13 @@ struct SyntheticSceneOptions {
     kHemisphere,  // a spiral around one temple from 10 to 65 degrees of elevation
     kSequence,    // a walk past a row of temples, looking sideways and down (sequential matching)
     kAerial,      // a drone survey of a town in overlapping strips, JPEG with EXIF focal and GPS
+    // Hard scenes (render/hard_layouts.h), each named for the failure it provokes:
+    kStreet,  // a walk down a street between two rows of temples, looking forward at eye
+              // height, 1 m a step: small triangulation angles everywhere
+    kTwin,    // a stadium orbit around two identical temples on different ground: repeated
+              // structure that can fold a model
+    kWeak,    // arcs around two temples 40 m apart joined by 2 to 4 distant views that see
+              // both: a barely linked view graph that incremental SfM splits in two
   };
 
   // Number of views.
@@ -58,13 +65,15 @@ struct SyntheticSceneOptions {
   double EffectiveFocalLength() const { return focal_length > 0 ? focal_length : 0.9 * width; }
 };
 
-// Parses "ring", "hemisphere", "sequence" or "aerial"; throws InputError otherwise.
+// Parses "ring", "hemisphere", "sequence", "aerial", "street", "twin" or "weak"; throws
+// InputError otherwise.
 SyntheticSceneOptions::Layout SyntheticSceneLayoutFromName(const std::string& name);
 
 // Parses "none", "quincunx" or "grid3x3"; throws InputError otherwise.
 Antialiasing AntialiasingFromName(const std::string& name);
 
-// The scene for these options (one temple, or a row long enough for the sequence).
+// The scene for these options (one temple, a row long enough for the sequence, a street of two
+// rows, two temples alike or two apart, or the town).
 SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& options);
 
 // The exact views without rendering: camera 1 (PINHOLE, principal point at the image centre),
@@ -90,7 +99,9 @@ RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, 
 // projection K [R | t] world to camera, COLMAP's pixel convention), `K.txt` (3x3) and a COLMAP text
 // model gt/{cameras,images,points3D}.txt without points; aerial surveys add gt/overlap_pairs.txt,
 // one line `NAME1 NAME2 SHARED` per pair of views that see at least 30 scene points in common
-// (ComputeCovisiblePairs). Deterministic for a seed. Returns the views (as SyntheticSceneViews).
+// (ComputeCovisiblePairs), and so do the hard layouts (street, twin, weak), to measure the view
+// graph a matcher finds against. Deterministic for a seed. Returns the views (as
+// SyntheticSceneViews).
 Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
                                       const std::filesystem::path& output_dir);
 

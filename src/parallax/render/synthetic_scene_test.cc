@@ -11,6 +11,8 @@
 #include <sstream>
 
 #include "parallax/calibration/exif.h"
+#include "parallax/render/covisibility.h"
+#include "parallax/render/hard_layouts.h"
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
@@ -76,6 +78,120 @@ TEST(SyntheticSceneViews, LongSequencesWalkPastARowOfTemples) {
   EXPECT_GT(length, 250.0);
 }
 
+// Whether the point projects into the view, in front of it.
+bool InView(const Reconstruction& views, const Image& image, const Eigen::Vector3d& point) {
+  const Eigen::Vector3d point_in_cam = image.cam_from_world * point;
+  if (point_in_cam.z() <= 0) return false;
+  const Camera& camera = views.GetCamera(image.camera_id);
+  const Eigen::Vector2d xy = camera.ImgFromCam(point_in_cam);
+  return xy.x() >= 0 && xy.y() >= 0 && xy.x() < camera.width && xy.y() < camera.height;
+}
+
+TEST(SyntheticSceneViews, StreetWalksForwardAtEyeHeight) {
+  SyntheticSceneOptions options;
+  options.layout = Layout::kStreet;
+  options.num_views = 30;
+  const Reconstruction views = SyntheticSceneViews(options);
+  ASSERT_EQ(views.NumRegImages(), 30u);
+  const SceneModel scene(SyntheticSceneModelOptions(options));
+  EXPECT_EQ(scene.Options().num_rows, 2);
+  // The rows reach well past the last view.
+  EXPECT_GT(scene.TempleCenter(scene.Options().num_temples - 1).x(),
+            views.GetImage(30).ProjectionCenter().x() + 60.0);
+  for (const auto& [image_id, image] : views.Images()) {
+    const Eigen::Vector3d center = image.ProjectionCenter();
+    EXPECT_NEAR(center.z(), 1.6, 0.2);
+    EXPECT_NEAR(center.y(), 0.5 * scene.Options().row_spacing, 0.5);
+    const Eigen::Vector3d direction = image.ViewingDirection();
+    EXPECT_GT(direction.x(), 0.98);  // Forward, down the street.
+    EXPECT_LT(direction.z(), 0.0);
+    // Facades on both sides and the ground are in view: a temple of each row some way ahead.
+    for (const int row : {0, 1}) {
+      int num_seen = 0;
+      for (int k = 0; k < scene.Options().num_temples; ++k) {
+        const Eigen::Vector3d temple = scene.TempleCenter(row * scene.Options().num_temples + k);
+        num_seen += InView(views, image, temple + Eigen::Vector3d(0, 0, 3));
+      }
+      EXPECT_GE(num_seen, 1) << image.name << " row " << row;
+    }
+    SurfaceHit hit;
+    ASSERT_TRUE(scene.Intersect(center, direction, 1e9, &hit));
+    EXPECT_EQ(hit.material, Material::kGround);
+    if (image_id == 1) continue;
+    // Consecutive views: about 1 m apart, mostly along the viewing direction.
+    const Eigen::Vector3d step = center - views.GetImage(image_id - 1).ProjectionCenter();
+    EXPECT_NEAR(step.norm(), 1.0, 0.4);
+    EXPECT_GT(step.normalized().dot(direction), 0.85) << image.name;
+  }
+}
+
+TEST(SyntheticSceneViews, TwinOrbitPassesBothIdenticalTemples) {
+  SyntheticSceneOptions options;
+  options.layout = Layout::kTwin;
+  options.num_views = 40;
+  const Reconstruction views = SyntheticSceneViews(options);
+  const SceneModel scene(SyntheticSceneModelOptions(options));
+  ASSERT_EQ(scene.NumTemples(), 2);
+  EXPECT_TRUE(scene.Options().identical_temples);
+  const Eigen::Vector3d temple0 = scene.TempleCenter(0), temple1 = scene.TempleCenter(1);
+  // Most views see one temple or the other; the few half way along the straight sides see
+  // the ground between them.
+  int num_seeing[2] = {0, 0}, num_seeing_none = 0;
+  double max_step = 0;
+  for (const auto& [image_id, image] : views.Images()) {
+    const Eigen::Vector3d center = image.ProjectionCenter();
+    const bool sees0 = InView(views, image, temple0 + Eigen::Vector3d(0, 0, 3));
+    const bool sees1 = InView(views, image, temple1 + Eigen::Vector3d(0, 0, 3));
+    num_seeing[0] += sees0;
+    num_seeing[1] += sees1;
+    num_seeing_none += !sees0 && !sees1;
+    SurfaceHit hit;
+    ASSERT_TRUE(scene.Intersect(center, image.ViewingDirection(), 1e9, &hit));
+    EXPECT_LT(hit.distance, 40.0);
+    if (image_id > 1) {
+      max_step =
+          std::max(max_step, (center - views.GetImage(image_id - 1).ProjectionCenter()).norm());
+    }
+  }
+  EXPECT_GE(num_seeing[0], 15);
+  EXPECT_GE(num_seeing[1], 15);
+  EXPECT_LE(num_seeing_none, 8);
+  EXPECT_LT(max_step, 7.0);
+}
+
+TEST(SyntheticSceneViews, WeakLayoutJoinsTwoPartsByAFewViews) {
+  SyntheticSceneOptions options;
+  options.layout = Layout::kWeak;
+  options.num_views = 30;
+  const Reconstruction views = SyntheticSceneViews(options);
+  const SceneModel scene(SyntheticSceneModelOptions(options));
+  ASSERT_EQ(scene.NumTemples(), 2);
+  const int num_bridge = WeakBridgeViewCount(options.num_views);
+  EXPECT_EQ(num_bridge, 3);
+  // Views 1..14 orbit temple 0, 15..17 see both, 18..30 orbit temple 1.
+  const auto part = [&](image_t image_id) {
+    return image_id <= 14 ? 0 : (image_id <= 14 + static_cast<image_t>(num_bridge) ? 2 : 1);
+  };
+  for (const auto& [image_id, image] : views.Images()) {
+    const bool sees0 = InView(views, image, scene.TempleCenter(0) + Eigen::Vector3d(0, 0, 3));
+    const bool sees1 = InView(views, image, scene.TempleCenter(1) + Eigen::Vector3d(0, 0, 3));
+    EXPECT_EQ(sees0, part(image_id) != 1) << image.name;
+    EXPECT_EQ(sees1, part(image_id) != 0) << image.name;
+  }
+  // The ground truth view graph: no pair of views across the parts but through the bridge.
+  CovisibilityOptions covisibility_options;
+  covisibility_options.num_threads = 2;
+  int num_bridged[2] = {0, 0};
+  for (const CovisiblePair& pair : ComputeCovisiblePairs(scene, views, covisibility_options)) {
+    const int part1 = part(pair.image_id1), part2 = part(pair.image_id2);
+    EXPECT_FALSE(part1 + part2 == 1) << pair.image_id1 << " " << pair.image_id2;
+    if (part1 == 2 && part2 != 2) ++num_bridged[part2];
+    if (part2 == 2 && part1 != 2) ++num_bridged[part1];
+  }
+  EXPECT_GE(num_bridged[0], 1);
+  EXPECT_GE(num_bridged[1], 1);
+}
+
 TEST(SyntheticSceneViews, DeterministicForASeed) {
   SyntheticSceneOptions options;
   options.layout = Layout::kHemisphere;
@@ -93,6 +209,9 @@ TEST(SyntheticSceneViews, DeterministicForASeed) {
   options.lighting_variation = 2.0;
   EXPECT_THROW(SyntheticSceneViews(options), CheckError);
   EXPECT_THROW(SyntheticSceneLayoutFromName("spiral"), InputError);
+  EXPECT_EQ(SyntheticSceneLayoutFromName("street"), Layout::kStreet);
+  EXPECT_EQ(SyntheticSceneLayoutFromName("twin"), Layout::kTwin);
+  EXPECT_EQ(SyntheticSceneLayoutFromName("weak"), Layout::kWeak);
 }
 
 TEST_F(SyntheticSceneTest, WritesImagesAndExactCameras) {
