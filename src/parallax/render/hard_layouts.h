@@ -30,9 +30,9 @@ constexpr double kStreetLookahead = 90.0;
 constexpr double kTwinSpacing = 36.0;
 
 // kWeak: arcs around two temples far apart, joined by a few distant views that see both.
-constexpr double kWeakSpacing = 40.0;
+constexpr double kWeakSpacing = 50.0;
 // Distance from the temples' axis of the views between them.
-constexpr double kWeakBridgeDistance = 46.0;
+constexpr double kWeakBridgeDistance = 56.0;
 
 // The scene each layout looks at.
 SceneModelOptions StreetSceneOptions(const SyntheticSceneOptions& options);

@@ -24,7 +24,7 @@ struct SyntheticSceneOptions {
               // height, 1 m a step: small triangulation angles everywhere
     kTwin,    // a stadium orbit around two identical temples on different ground: repeated
               // structure that can fold a model
-    kWeak,    // arcs around two temples 40 m apart joined by 2 to 4 distant views that see
+    kWeak,    // arcs around two temples 50 m apart joined by 2 to 4 distant views that see
               // both: a barely linked view graph that incremental SfM splits in two
   };
 
