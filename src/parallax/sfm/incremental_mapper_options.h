@@ -22,7 +22,7 @@ struct IncrementalMapperOptions {
       16.0;                             // Median triangulation angle of the initial pair.
   int init_min_num_inliers_floor = 25;  // The relaxation goes no lower.
   double init_min_triangulation_angle_floor_deg = 2.0;
-  int init_max_trials = 200;  // Candidate pairs examined per step of the relaxation.
+  int init_max_trials = 200;  // Pairs adjusted per step of the relaxation (that met it).
   // Registration of the next image.
   AbsolutePoseEstimationOptions absolute_pose;
   AbsolutePoseRefinementOptions absolute_pose_refinement;

@@ -68,16 +68,21 @@ bool ModelBuilder::InitializeFromBestPair(InitialPairLedger* ledger) {
   });
   int num_pairs_tried = 0;
   for (const InitThresholds& thresholds : schedule) {
+    // Every candidate is held to the step's thresholds (each is triangulated once, in the
+    // ledger); the trials are the pairs that met them and were adjusted. A cap on candidates
+    // instead left a forward walk's wide pairs, past the 200 with most inliers, untried.
     int trials = 0;
     for (const auto& [pair_id, geometry] : candidates) {
       // Sorted by inliers: the rest have too few for this step.
       if (static_cast<int>(geometry->inlier_matches.size()) < thresholds.min_num_inliers) break;
-      if (trials++ >= options_.init_max_trials) break;
+      if (trials >= options_.init_max_trials) break;
       ++num_pairs_tried;
-      if (InitializeFromPair(pair_id, *geometry, thresholds, ledger)) {
+      bool met_thresholds = false;
+      if (InitializeFromPair(pair_id, *geometry, thresholds, ledger, &met_thresholds)) {
         start_.num_pairs_tried = num_pairs_tried - 1;
         return true;
       }
+      if (met_thresholds) ++trials;
     }
     PARALLAX_LOG(Debug) << "mapper: no initial pair with " << thresholds.min_num_inliers
                         << " inliers at a median angle of " << thresholds.min_angle_deg << " deg";
@@ -142,7 +147,8 @@ bool ModelBuilder::ImagesLeftToRegister() const {
 }
 
 bool ModelBuilder::InitializeFromPair(image_pair_t pair_id, const TwoViewGeometry& geometry,
-                                      const InitThresholds& thresholds, InitialPairLedger* ledger) {
+                                      const InitThresholds& thresholds, InitialPairLedger* ledger,
+                                      bool* met_thresholds) {
   const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
   const Image& image1 = reconstruction_.GetImage(image_id1);
   const Image& image2 = reconstruction_.GetImage(image_id2);
@@ -177,6 +183,7 @@ bool ModelBuilder::InitializeFromPair(image_pair_t pair_id, const TwoViewGeometr
   }
   // Tried once: a pair that fails from here on would fail again.
   if (ledger != nullptr) ledger->started.insert(pair_id);
+  if (met_thresholds != nullptr) *met_thresholds = true;
 
   reconstruction_.GetImage(image_id1).cam_from_world = Rigid3d();
   reconstruction_.GetImage(image_id2).cam_from_world = evaluation->cam2_from_cam1;

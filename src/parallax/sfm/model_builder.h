@@ -44,17 +44,19 @@ class ModelBuilder {
 
   // ----- Initialisation ---------------------------------------------------------------------
   // Walks InitThresholdSchedule: at each step, the verified pairs of unused images with at
-  // least that step's inliers, most inliers first (up to init_max_trials of them), until one
-  // starts the model. `ledger` (shared by the models of a run; none: one of its own) keeps
-  // each pair's evaluation and skips pairs an earlier model started from. False when no pair
-  // qualifies at any step.
+  // least that step's inliers, most inliers first, until one starts the model (at most
+  // init_max_trials of them meeting the thresholds and being adjusted per step). `ledger` (shared
+  // by the models of a run; none: one of its own) keeps each pair's evaluation and skips pairs an
+  // earlier model started from. False when no pair qualifies at any step.
   bool InitializeFromBestPair(InitialPairLedger* ledger = nullptr);
   // Registers the two images of `pair_id` with the pair's relative pose, triangulates their
   // matches and adjusts both. False (nothing registered) when fewer than the thresholds'
   // inliers triangulate, their median angle is below theirs, or fewer than half that many
-  // points survive the adjustment.
+  // points survive the adjustment. `met_thresholds` (when given) is set when the pair met
+  // the thresholds, whether or not the adjustment then kept it.
   bool InitializeFromPair(image_pair_t pair_id, const TwoViewGeometry& geometry,
-                          const InitThresholds& thresholds, InitialPairLedger* ledger = nullptr);
+                          const InitThresholds& thresholds, InitialPairLedger* ledger = nullptr,
+                          bool* met_thresholds = nullptr);
   // What a seed model is: a finished, adjusted model given by the user (its images counted
   // as new registrations, a few photos added to it settled lightly: ExtendingSeed), or this
   // run's models joined by JoinModels (counted already, and never adjusted as a whole: the
