@@ -29,6 +29,14 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
   app.add_option("--abs-pose-min-inliers", mapper.absolute_pose_min_num_inliers,
                  "PnP inliers an image needs to be registered")
       ->capture_default_str();
+  app.add_option("--abs-pose-relaxed-min-inliers", mapper.relaxed_absolute_pose_min_num_inliers,
+                 "... in the last pass, when nothing more registers at the usual bars")
+      ->capture_default_str();
+  app.add_option("--abs-pose-relaxed-min-inlier-ratio",
+                 mapper.relaxed_absolute_pose_min_inlier_ratio,
+                 "Share of the 2D-3D correspondences that must be PnP inliers in the last pass")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("--abs-pose-max-error", mapper.absolute_pose.ransac.max_error,
                  "PnP RANSAC threshold, pixels")
       ->capture_default_str();
@@ -66,6 +74,8 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
       ->check(CLI::Range(1.0, 100.0));
   app.add_flag("!--no-multiple-models", mapper.multiple_models,
                "Stop after the first model instead of starting new ones");
+  app.add_flag("!--no-join-models", mapper.join_models,
+               "Keep the models apart instead of joining those that share tracks");
   app.add_flag_function(
       "--no-refine-intrinsics",
       [&mapper](int64_t) {

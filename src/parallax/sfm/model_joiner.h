@@ -11,10 +11,10 @@ namespace parallax {
 
 struct ModelJoinerOptions {
   // Tracks with a point in both models that must agree with the similarity.
-  int min_inlier_points = 30;
+  int min_inlier_points = 15;
   // Inlier distance of the similarity RANSAC, as a share of the spread of the joined points
   // (their median distance from their median): independent of each model's arbitrary scale.
-  double max_error_fraction = 0.01;
+  double max_error_fraction = 0.03;
   RansacOptions ransac = Sim3dRansacOptions(1.0);  // Its max_error and seed are set per join.
   uint64_t seed = 0;
   void Check() const;
