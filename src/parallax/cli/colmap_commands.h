@@ -1,0 +1,14 @@
+#pragma once
+
+// The `colmap` drop-in's subcommands (colmap_commands.cc); each takes COLMAP's options of
+// either generation (argv[0] is the subcommand's name) and returns the process exit code.
+namespace parallax::cli {
+
+int RunColmapFeatureExtractor(int argc, char** argv);
+int RunColmapExhaustiveMatcher(int argc, char** argv);
+int RunColmapSequentialMatcher(int argc, char** argv);
+int RunColmapMapper(int argc, char** argv);
+int RunColmapImageUndistorter(int argc, char** argv);
+int RunColmapModelConverter(int argc, char** argv);
+
+}  // namespace parallax::cli

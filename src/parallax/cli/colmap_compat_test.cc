@@ -1,0 +1,184 @@
+// The `colmap` drop-in: COLMAP's options of both generations become the same Parallax flags,
+// unknown ones fail naming themselves, meaningless ones warn; and the command lines Gaussian
+// splatting's convert.py issues (written down from the script) run end to end, leaving
+// COLMAP's file layout.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "parallax/cli/cli_test_process.h"
+#include "parallax/cli/colmap_flags.h"
+#include "parallax/scene/colmap_io.h"
+#include "parallax/util/check.h"
+#include "parallax/util/test_dir.h"
+
+namespace parallax::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<ColmapOption> kTable = {
+    {{"database_path"}, ColmapOption::Kind::kValue, "--database", "", nullptr},
+    {{"FeatureExtraction.num_threads", "SiftExtraction.num_threads"},
+     ColmapOption::Kind::kValue,
+     "--threads",
+     "",
+     nullptr},
+    {{"ImageReader.single_camera"}, ColmapOption::Kind::kFlagIfOn, "--single-camera", "", nullptr},
+    {{"SiftMatching.cross_check"}, ColmapOption::Kind::kFlagIfOff, "--no-cross-check", "", nullptr},
+    {{"FeatureExtraction.use_gpu", "SiftExtraction.use_gpu"},
+     ColmapOption::Kind::kIgnored,
+     "",
+     "has no meaning here",
+     nullptr},
+};
+
+TEST(ColmapFlags, BothGenerationsAndBothSpellingsGiveTheSameParallaxFlags) {
+  const ColmapTranslation three =
+      TranslateColmapArgs("feature_extractor",
+                          {"--database_path", "db.db", "--SiftExtraction.num_threads", "2",
+                           "--ImageReader.single_camera", "1", "--SiftExtraction.use_gpu", "1"},
+                          kTable);
+  const ColmapTranslation four =
+      TranslateColmapArgs("feature_extractor",
+                          {"--database_path=db.db", "--FeatureExtraction.num_threads=2",
+                           "--ImageReader.single_camera=true", "--FeatureExtraction.use_gpu=0"},
+                          kTable);
+  const std::vector<std::string> expected = {"--database", "db.db", "--threads", "2",
+                                             "--single-camera"};
+  EXPECT_EQ(three.parallax_args, expected);
+  EXPECT_EQ(four.parallax_args, expected);
+  ASSERT_EQ(three.warnings.size(), 1u);
+  EXPECT_EQ(three.warnings[0], "--SiftExtraction.use_gpu has no meaning here; ignored");
+  EXPECT_FALSE(three.help);
+}
+
+TEST(ColmapFlags, BooleansFollowCOLMAPsSpellings) {
+  EXPECT_TRUE(ParseColmapBool("x", "TRUE"));
+  EXPECT_FALSE(ParseColmapBool("x", "0"));
+  EXPECT_THROW(ParseColmapBool("x", "yes"), InputError);
+  // A boolean alone is true; cross_check 0 becomes --no-cross-check, 1 nothing.
+  EXPECT_EQ(TranslateColmapArgs("m", {"--ImageReader.single_camera"}, kTable).parallax_args,
+            std::vector<std::string>{"--single-camera"});
+  EXPECT_EQ(TranslateColmapArgs("m", {"--SiftMatching.cross_check", "0"}, kTable).parallax_args,
+            std::vector<std::string>{"--no-cross-check"});
+  EXPECT_TRUE(
+      TranslateColmapArgs("m", {"--SiftMatching.cross_check", "1"}, kTable).parallax_args.empty());
+}
+
+TEST(ColmapFlags, AnUnknownOptionFailsNamingIt) {
+  try {
+    TranslateColmapArgs("feature_extractor", {"--SiftExtraction.no_such_option", "1"}, kTable);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "colmap feature_extractor: unrecognised option '--SiftExtraction.no_such_option'");
+  }
+  EXPECT_THROW(TranslateColmapArgs("m", {"--database_path"}, kTable), InputError);  // No value.
+  EXPECT_THROW(TranslateColmapArgs("m", {"stray"}, kTable), InputError);
+  // COLMAP's options common to every subcommand are accepted with a warning.
+  const ColmapTranslation common = TranslateColmapArgs("m", {"--log_to_stderr", "1"}, kTable);
+  EXPECT_TRUE(common.parallax_args.empty());
+  EXPECT_EQ(common.warnings.size(), 1u);
+}
+
+class ColmapDropInTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (test::ParallaxBinary().empty()) GTEST_SKIP() << "PARALLAX_BINARY not set";
+    colmap_ = (fs::path(test::ParallaxBinary()).parent_path() / "colmap").string();
+    ASSERT_TRUE(fs::exists(colmap_)) << colmap_;
+  }
+  test::ProcessResult Colmap(std::vector<std::string> arguments) {
+    arguments.insert(arguments.begin(), colmap_);
+    test::ChildProcess child(arguments, dir_.path() / "stdout.txt", dir_.path() / "stderr.txt");
+    return child.Wait(300);
+  }
+  // The images in <source>/input, as convert.py expects them; no intrinsics given.
+  fs::path RenderSource(int num_views) {
+    const fs::path source = dir_.path() / "source";
+    test::RenderSyntheticScene(source / "input", num_views, 640, 480, dir_.path());
+    for (const char* extra : {"gt", "K.txt", "synth_par.txt"})
+      fs::remove_all(source / "input" / extra);
+    return source;
+  }
+  // convert.py's sequence without the model alignment (its --skip_alignment), with the
+  // extraction and matching sections of one COLMAP generation.
+  void RunConvertSequence(const fs::path& source, const std::string& extraction,
+                          const std::string& matching) {
+    const std::string db = (source / "distorted" / "database.db").string();
+    const std::string input = (source / "input").string();
+    fs::create_directories(source / "distorted" / "sparse");
+    test::ProcessResult result =
+        Colmap({"feature_extractor", "--database_path", db, "--image_path", input,
+                "--ImageReader.single_camera", "1", "--ImageReader.camera_model", "OPENCV",
+                "--" + extraction + ".use_gpu", "1"});
+    ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+    EXPECT_NE(result.err.find("colmap: warning: --" + extraction + ".use_gpu"), std::string::npos);
+    result =
+        Colmap({"exhaustive_matcher", "--database_path", db, "--" + matching + ".use_gpu", "1"});
+    ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+    result = Colmap({"mapper", "--database_path", db, "--image_path", input, "--output_path",
+                     (source / "distorted" / "sparse").string(),
+                     "--Mapper.ba_global_function_tolerance=0.000001"});
+    ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+    result = Colmap({"image_undistorter", "--image_path", input, "--input_path",
+                     (source / "distorted" / "sparse" / "0").string(), "--output_path",
+                     source.string(), "--output_type", "COLMAP"});
+    ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  }
+  void ExpectColmapLayout(const fs::path& source, size_t num_views) {
+    // The mapper's models as COLMAP writes them: <output_path>/<k>/*.bin, nothing else.
+    const fs::path model = source / "distorted" / "sparse" / "0";
+    for (const char* file : {"cameras.bin", "images.bin", "points3D.bin"}) {
+      EXPECT_TRUE(fs::exists(model / file)) << file;
+    }
+    EXPECT_FALSE(fs::exists(model / "images.txt"));
+    for (const fs::directory_entry& entry :
+         fs::directory_iterator(source / "distorted" / "sparse")) {
+      EXPECT_TRUE(entry.is_directory() && entry.path().filename().string()[0] != '.')
+          << entry.path();
+    }
+    EXPECT_EQ(ReadReconstruction(model).NumRegImages(), num_views);
+    // The undistorted workspace.
+    EXPECT_TRUE(fs::exists(source / "sparse" / "cameras.bin"));
+    EXPECT_TRUE(fs::exists(source / "stereo" / "patch-match.cfg"));
+    size_t num_images = 0;
+    for ([[maybe_unused]] const auto& entry : fs::directory_iterator(source / "images"))
+      ++num_images;
+    EXPECT_EQ(num_images, num_views);
+  }
+
+  test::ScopedTestDir dir_{"parallax_colmap_compat_test"};
+  std::string colmap_;
+};
+
+TEST_F(ColmapDropInTest, GaussianSplattingsConvertSequenceWithCOLMAP3Flags) {
+  const fs::path source = RenderSource(24);
+  RunConvertSequence(source, "SiftExtraction", "SiftMatching");
+  ExpectColmapLayout(source, 24);
+}
+
+TEST_F(ColmapDropInTest, GaussianSplattingsConvertSequenceWithCOLMAP4Flags) {
+  const fs::path source = RenderSource(24);
+  RunConvertSequence(source, "FeatureExtraction", "FeatureMatching");
+  ExpectColmapLayout(source, 24);
+}
+
+TEST_F(ColmapDropInTest, BadOptionsAndCommandsFailInOneLine) {
+  test::ProcessResult result = Colmap({"feature_extractor", "--SiftExtraction.bogus", "1"});
+  EXPECT_TRUE(result.ExitedWith(1));
+  EXPECT_EQ(result.err,
+            "error: colmap feature_extractor: unrecognised option '--SiftExtraction.bogus'\n");
+  result = Colmap({"no_such_command"});
+  EXPECT_TRUE(result.ExitedWith(1));
+  EXPECT_NE(result.err.find("unknown command 'no_such_command'"), std::string::npos);
+  result = Colmap({"image_undistorter", "--output_type", "PMVS"});
+  EXPECT_TRUE(result.ExitedWith(1));
+  EXPECT_NE(result.err.find("--output_type PMVS is not supported"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace parallax::cli
