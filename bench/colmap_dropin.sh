@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Gaussian splatting's convert.py sequence (feature_extractor, exhaustive_matcher, mapper,
-# image_undistorter; written down from the script, its alignment step not yet) through
+# model_aligner --alignment_type plane, image_undistorter; written down from the script) through
 # Parallax's `colmap` drop-in and through COLMAP 4.2 ($COLMAP4, default
 # ../shared/tools/colmap4/bin/colmap), both with COLMAP 4.x flags, on one folder of photos
 # (default $PARALLAX_DATA/templeRing/images). Prints each tool's wall time per step and the
-# registered images of sparse/0 as COLMAP 4.2's model_analyzer reads them.
+# registered images of each model (distorted/sparse/<k>) as COLMAP 4.2's model_analyzer reads
+# them; sparse/0 is the one convert.py undistorts.
 #
 # Usage: bench/colmap_dropin.sh [IMAGES] [WORK_DIR]   Environment: THREADS (2).
 set -euo pipefail
@@ -38,12 +39,17 @@ run_sequence() {
   step mapper --database_path "$source/distorted/database.db" --image_path "$images" \
     --output_path "$source/distorted/sparse" --Mapper.ba_global_function_tolerance=0.000001 \
     --Mapper.num_threads "$threads"
+  step model_aligner --input_path "$source/distorted/sparse/0" \
+    --database_path "$source/distorted/database.db" --alignment_max_error 0.1 \
+    --alignment_type plane --output_path "$source/distorted/sparse/0"
   step image_undistorter --image_path "$images" --input_path "$source/distorted/sparse/0" \
     --output_path "$source" --output_type COLMAP
-  local registered
-  registered=$("$colmap4" model_analyzer --path "$source/distorted/sparse/0" 2>&1 |
-    sed -n 's/.*Registered images: //p' | head -1)
-  echo "$name: ${times[*]} s; sparse/0 registered $registered (read by COLMAP 4.2)"
+  local registered="" model
+  for model in "$source"/distorted/sparse/*/; do
+    registered+=" $(basename "$model"):$("$colmap4" model_analyzer --path "$model" 2>&1 |
+      sed -n 's/.*Registered images: //p' | head -1)"
+  done
+  echo "$name: ${times[*]} s; registered per model${registered} (read by COLMAP 4.2)"
 }
 
 run_sequence parallax-colmap "$dropin"

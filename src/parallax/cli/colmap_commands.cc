@@ -3,6 +3,7 @@
 // land where COLMAP puts them.
 #include "parallax/cli/colmap_commands.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -249,6 +250,34 @@ int RunColmapImageUndistorter(int argc, char** argv) {
   };
   return Translate("image_undistorter", argc, argv, table, [](const ColmapTranslation& t) {
     return RunTranslated(RunUndistort, "undistort", t);
+  });
+}
+
+int RunColmapModelAligner(int argc, char** argv) {
+  const std::vector<ColmapOption> table = {
+      Value({"input_path"}, "--input"),
+      Value({"output_path"}, "--output"),
+      Custom({"alignment_type"},
+             [](const std::string& value, std::vector<std::string>* args) {
+               if (value != "plane") {
+                 throw InputError("colmap model_aligner: --alignment_type " + value +
+                                  " is not supported yet (plane)");
+               }
+               args->push_back("--plane");
+             }),
+      Ignored({"database_path"}, "is not needed by the plane alignment"),
+      Ignored({"alignment_max_error", "min_common_images", "robust_alignment",
+               "robust_alignment_max_error", "estimate_scale"},
+              "applies to alignment to reference positions, not to the plane"),
+  };
+  return Translate("model_aligner", argc, argv, table, [](ColmapTranslation translation) {
+    const auto& args = translation.parallax_args;
+    if (std::find(args.begin(), args.end(), "--plane") == args.end()) {
+      throw InputError("colmap model_aligner: --alignment_type is required (plane)");
+    }
+    translation.parallax_args.insert(translation.parallax_args.begin(), "align");
+    translation.parallax_args.push_back("--no-text");  // COLMAP writes the binary model.
+    return RunTranslated(RunModel, "model", translation);
   });
 }
 

@@ -9,6 +9,7 @@ int RunColmapExhaustiveMatcher(int argc, char** argv);
 int RunColmapSequentialMatcher(int argc, char** argv);
 int RunColmapMapper(int argc, char** argv);
 int RunColmapImageUndistorter(int argc, char** argv);
+int RunColmapModelAligner(int argc, char** argv);
 int RunColmapModelConverter(int argc, char** argv);
 
 }  // namespace parallax::cli

@@ -104,12 +104,13 @@ class ColmapDropInTest : public ::testing::Test {
       fs::remove_all(source / "input" / extra);
     return source;
   }
-  // convert.py's sequence without the model alignment (its --skip_alignment), with the
-  // extraction and matching sections of one COLMAP generation.
+  // convert.py's sequence, with the extraction and matching sections of one COLMAP
+  // generation.
   void RunConvertSequence(const fs::path& source, const std::string& extraction,
                           const std::string& matching) {
     const std::string db = (source / "distorted" / "database.db").string();
     const std::string input = (source / "input").string();
+    const std::string model = (source / "distorted" / "sparse" / "0").string();
     fs::create_directories(source / "distorted" / "sparse");
     test::ProcessResult result =
         Colmap({"feature_extractor", "--database_path", db, "--image_path", input,
@@ -123,6 +124,10 @@ class ColmapDropInTest : public ::testing::Test {
     result = Colmap({"mapper", "--database_path", db, "--image_path", input, "--output_path",
                      (source / "distorted" / "sparse").string(),
                      "--Mapper.ba_global_function_tolerance=0.000001"});
+    ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+    result = Colmap({"model_aligner", "--input_path", model, "--database_path", db,
+                     "--alignment_max_error", "0.1", "--alignment_type", "plane", "--output_path",
+                     model});
     ASSERT_TRUE(result.ExitedWith(0)) << result.err;
     result = Colmap({"image_undistorter", "--image_path", input, "--input_path",
                      (source / "distorted" / "sparse" / "0").string(), "--output_path",
@@ -141,7 +146,17 @@ class ColmapDropInTest : public ::testing::Test {
       EXPECT_TRUE(entry.is_directory() && entry.path().filename().string()[0] != '.')
           << entry.path();
     }
-    EXPECT_EQ(ReadReconstruction(model).NumRegImages(), num_views);
+    const Reconstruction reconstruction = ReadReconstruction(model);
+    EXPECT_EQ(reconstruction.NumRegImages(), num_views);
+    // Aligned to its principal plane: the points around the origin, the cameras above.
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& [point3D_id, point] : reconstruction.Points3D()) {
+      centroid += point.xyz / static_cast<double>(reconstruction.NumPoints3D());
+    }
+    EXPECT_LT(centroid.norm(), 1e-6);
+    for (const image_t image_id : reconstruction.RegImageIds()) {
+      EXPECT_GT(reconstruction.GetImage(image_id).ProjectionCenter().z(), 0.0) << image_id;
+    }
     // The undistorted workspace.
     EXPECT_TRUE(fs::exists(source / "sparse" / "cameras.bin"));
     EXPECT_TRUE(fs::exists(source / "stereo" / "patch-match.cfg"));

@@ -20,6 +20,7 @@ constexpr Command kCommands[] = {
     {"sequential_matcher", parallax::cli::RunColmapSequentialMatcher},
     {"mapper", parallax::cli::RunColmapMapper},
     {"image_undistorter", parallax::cli::RunColmapImageUndistorter},
+    {"model_aligner", parallax::cli::RunColmapModelAligner},
     {"model_converter", parallax::cli::RunColmapModelConverter},
 };
 

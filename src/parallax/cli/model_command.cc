@@ -7,6 +7,7 @@
 #include "parallax/report/ground_truth.h"
 #include "parallax/report/model_union.h"
 #include "parallax/scene/colmap_io.h"
+#include "parallax/scene/principal_plane.h"
 #include "parallax/util/check.h"
 
 namespace parallax::cli {
@@ -50,13 +51,20 @@ int RunModel(int argc, char** argv) {
   CLI::App* align = app.add_subcommand(
       "align",
       "Move a model into the frame of a reference (ground truth or another model) by the "
-      "similarity of their camera centres (RANSAC), and write it");
+      "similarity of their camera centres (RANSAC), or lay its principal plane on z = 0 "
+      "(--plane), and write it");
   align->add_option("--input", input, "Model folder")->required();
+  CLI::Option* reference_option =
+      align->add_option("--reference", reference,
+                        "Ground truth (*_par.txt, a folder of *.camera files) or a model folder; "
+                        "images are matched by name");
+  bool plane = false, no_text = false;
   align
-      ->add_option("--reference", reference,
-                   "Ground truth (*_par.txt, a folder of *.camera files) or a model folder; "
-                   "images are matched by name")
-      ->required();
+      ->add_flag("--plane", plane,
+                 "Instead: the points' plane of largest spread onto z = 0, centroid at the "
+                 "origin, cameras above (COLMAP's model_aligner --alignment_type plane)")
+      ->excludes(reference_option);
+  align->add_flag("--no-text", no_text, "Write the binary model only");
   align->add_option("--output", output, "Folder of the aligned model (binary and text)")
       ->required();
 
@@ -98,11 +106,20 @@ int RunModel(int argc, char** argv) {
                 << report.num_images_added << " images and " << report.num_points_added
                 << " points added; " << united.NumRegImages() << " images, " << united.NumPoints3D()
                 << " points -> " << output << "\n";
+    } else if (plane) {
+      Reconstruction aligned = model;
+      const Sim3d aligned_from_model = PrincipalPlaneAlignment(model);
+      aligned.Transform(aligned_from_model);
+      WriteReconstructionBinary(aligned, output);
+      if (!no_text) WriteReconstructionText(aligned, output);
+      std::cout << "model align: principal plane of " << model.NumPoints3D()
+                << " points onto z = 0 -> " << output << "\n";
     } else {
+      if (reference.empty()) throw InputError("model align: give --reference or --plane");
       EvaluationMetrics metrics;
       const Reconstruction aligned = AlignToReference(model, ReadGroundTruth(reference), &metrics);
       WriteReconstructionBinary(aligned, output);
-      WriteReconstructionText(aligned, output);
+      if (!no_text) WriteReconstructionText(aligned, output);
       std::cout << "model align: scale " << metrics.gt_from_model.scale << ", "
                 << metrics.num_alignment_inliers << "/" << metrics.num_registered_in_gt
                 << " shared images agree; median centre error " << metrics.center_error.median
