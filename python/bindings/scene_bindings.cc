@@ -327,15 +327,28 @@ void BindReconstruction(py::module_& m) {
   py::class_<Reconstruction>(m, "Reconstruction",
                              "A sparse model: cameras, posed images and 3D points (COLMAP's).")
       .def(py::init<>())
-      .def_static(
-          "read", [](const std::filesystem::path& dir) { return ReadReconstruction(dir); },
-          py::arg("path"), "Reads a COLMAP model folder (.bin or .txt).")
+      .def(py::init([](const std::filesystem::path& dir) { return ReadReconstruction(dir); }),
+           py::arg("path"), "Reads a COLMAP model folder (.bin or .txt), as pycolmap's does.")
+      // `read` itself is defined in parallax/__init__.py: on the class it returns a new model,
+      // on a model it reads into it (pycolmap's habit).
+      .def(
+          "_read_into",
+          [](Reconstruction& model, const std::filesystem::path& dir) {
+            model = ReadReconstruction(dir);
+          },
+          py::arg("path"))
       .def(
           "write",
           [](const Reconstruction& model, const std::filesystem::path& dir) {
             WriteReconstructionBinary(model, dir);
           },
           py::arg("path"), "Writes cameras.bin, images.bin, points3D.bin into a folder.")
+      .def(
+          "write_binary",
+          [](const Reconstruction& model, const std::filesystem::path& dir) {
+            WriteReconstructionBinary(model, dir);
+          },
+          py::arg("path"), "As write (pycolmap's name).")
       .def(
           "write_text",
           [](const Reconstruction& model, const std::filesystem::path& dir) {

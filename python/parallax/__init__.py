@@ -57,6 +57,19 @@ from ._parallax import (  # noqa: F401
 __version__ = "0.1.0"
 
 
+class _ReadOnClassOrModel:
+    """Reconstruction.read(path) returns a new model (Parallax's way); model.read(path) reads
+    into that model, as pycolmap's does, instead of returning a new one and leaving it empty."""
+
+    def __get__(self, model, cls):
+        if model is None:
+            return cls
+        return model._read_into
+
+
+Reconstruction.read = _ReadOnClassOrModel()
+
+
 def read_model(path):
     """Reads a COLMAP model folder (cameras/images/points3D, .bin or .txt)."""
     return Reconstruction.read(path)

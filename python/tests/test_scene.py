@@ -127,3 +127,18 @@ def test_export_model_for_nerfstudio(model_dir, tmp_path):
     assert (tmp_path / "sparse_pc.ply").exists()
     with pytest.raises(ValueError, match="unknown export format 'obj'"):
         parallax.export_model(model_dir, tmp_path / "x.obj", format="obj")
+
+
+def test_pycolmap_habits_read_in_place_and_construct_from_a_path(model_dir, tmp_path):
+    # pycolmap's Reconstruction(path), and rec.read(path) filling rec itself.
+    from_path = parallax.Reconstruction(model_dir)
+    in_place = parallax.Reconstruction()
+    assert in_place.read(model_dir) is None
+    assert in_place.num_reg_images() == from_path.num_reg_images() > 0
+    assert in_place.num_points3D() == from_path.num_points3D() > 0
+    # Parallax's own: on the class, read returns a new model.
+    assert parallax.Reconstruction.read(model_dir).num_points3D() == from_path.num_points3D()
+    in_place.write_binary(tmp_path / "bin")
+    assert parallax.Reconstruction(tmp_path / "bin").num_points3D() == from_path.num_points3D()
+    with pytest.raises(FileNotFoundError):
+        parallax.Reconstruction(tmp_path / "missing")
