@@ -178,14 +178,57 @@ int RunColmapSequentialMatcher(int argc, char** argv) {
   });
 }
 
-int RunColmapMapper(int argc, char** argv) {
-  namespace fs = std::filesystem;
-  std::string output_path;
+int RunColmapVocabTreeMatcher(int argc, char** argv) {
+  std::vector<ColmapOption> table = MatchingOptions();
+  table.push_back(Value({"VocabTreeMatching.num_images"}, "--retrieval-neighbors"));
+  table.push_back(Ignored({"VocabTreeMatching.vocab_tree_path"},
+                          "is COLMAP's tree format: Parallax trains its own on the database's "
+                          "descriptors"));
+  table.push_back(
+      Ignored({"VocabTreeMatching.num_nearest_neighbors", "VocabTreeMatching.num_checks",
+               "VocabTreeMatching.num_images_after_verification",
+               "VocabTreeMatching.max_num_features", "VocabTreeMatching.match_list_path"},
+              "is not used by Parallax's retrieval"));
+  return Translate("vocab_tree_matcher", argc, argv, table, [](ColmapTranslation translation) {
+    translation.parallax_args.insert(translation.parallax_args.end(), {"--pairs", "retrieval"});
+    return RunTranslated(RunMatch, "match", translation);
+  });
+}
+
+int RunColmapSpatialMatcher(int argc, char** argv) {
+  std::vector<ColmapOption> table = MatchingOptions();
+  table.push_back(Value({"SpatialMatching.max_num_neighbors"}, "--spatial-neighbors"));
+  table.push_back(Value({"SpatialMatching.max_distance"}, "--spatial-max-distance"));
+  table.push_back(Ignored({"SpatialMatching.is_gps", "SpatialMatching.ignore_z"},
+                          "is decided from the priors Parallax reads (GPS positions are "
+                          "compared in local metres)"));
+  return Translate("spatial_matcher", argc, argv, table, [](ColmapTranslation translation) {
+    translation.parallax_args.insert(translation.parallax_args.end(), {"--pairs", "spatial"});
+    return RunTranslated(RunMatch, "match", translation);
+  });
+}
+
+int RunColmapModelAnalyzer(int argc, char** argv) {
   const std::vector<ColmapOption> table = {
+      Custom({"path"}, [](const std::string& value,
+                          std::vector<std::string>* args) { args->push_back(value); }),
+  };
+  return Translate("model_analyzer", argc, argv, table, [](ColmapTranslation translation) {
+    translation.parallax_args.insert(translation.parallax_args.begin(), "analyze");
+    return RunTranslated(RunModel, "model", translation);
+  });
+}
+
+namespace {
+
+// COLMAP's mapper options, for mapper and hierarchical_mapper; `output_path` is kept aside:
+// both write <output_path>/<k>/ where Parallax writes OUT/sparse/<k>/.
+std::vector<ColmapOption> MapperOptions(std::string* output_path) {
+  return {
       Value({"database_path"}, "--database"),
       Value({"image_path"}, "--image-path"),
-      Custom({"output_path"}, [&output_path](const std::string& value,
-                                             std::vector<std::string>*) { output_path = value; }),
+      Custom({"output_path"}, [output_path](const std::string& value,
+                                            std::vector<std::string>*) { *output_path = value; }),
       Value({"input_path"}, "--input-model"),
       Value({"Mapper.num_threads"}, "--ba-threads"),
       Value({"Mapper.init_min_num_inliers"}, "--init-min-inliers"),
@@ -208,28 +251,55 @@ int RunColmapMapper(int argc, char** argv) {
       Ignored({"Mapper.ba_use_gpu", "Mapper.ba_gpu_index"}, kNoGpu),
       Ignored({"Mapper.extract_colors"}, "is always on"),
   };
-  return Translate("mapper", argc, argv, table, [&output_path](ColmapTranslation translation) {
-    if (output_path.empty()) throw InputError("colmap mapper: --output_path is required");
-    // Parallax writes OUT/sparse/<k>; COLMAP writes <output_path>/<k>. Mapped beside, then
-    // each model moved into place.
-    const fs::path output(output_path);
-    const fs::path staging =
-        output.parent_path() / ("." + output.filename().string() + ".parallax");
-    fs::remove_all(staging);
-    translation.parallax_args.insert(translation.parallax_args.end(),
-                                     {"--output", staging.string(), "--no-text"});
-    const int code = RunTranslated(RunMapper, "mapper", translation);
-    if (code == 0) {
-      fs::create_directories(output);
-      for (const fs::directory_entry& model : fs::directory_iterator(staging / "sparse")) {
-        const fs::path target = output / model.path().filename();
-        fs::remove_all(target);
-        fs::rename(model.path(), target);
-      }
+}
+
+// Runs `parallax mapper` into a folder beside `output_path`, then moves each model into place.
+int RunMapperInto(const std::string& subcommand, const std::string& output_path,
+                  ColmapTranslation translation) {
+  namespace fs = std::filesystem;
+  if (output_path.empty()) throw InputError("colmap " + subcommand + ": --output_path is required");
+  // Parallax writes OUT/sparse/<k>; COLMAP writes <output_path>/<k>. Mapped beside, then
+  // each model moved into place.
+  const fs::path output(output_path);
+  const fs::path staging = output.parent_path() / ("." + output.filename().string() + ".parallax");
+  fs::remove_all(staging);
+  translation.parallax_args.insert(translation.parallax_args.end(),
+                                   {"--output", staging.string(), "--no-text"});
+  const int code = RunTranslated(RunMapper, "mapper", translation);
+  if (code == 0) {
+    fs::create_directories(output);
+    for (const fs::directory_entry& model : fs::directory_iterator(staging / "sparse")) {
+      const fs::path target = output / model.path().filename();
+      fs::remove_all(target);
+      fs::rename(model.path(), target);
     }
-    fs::remove_all(staging);
-    return code;
-  });
+  }
+  fs::remove_all(staging);
+  return code;
+}
+
+}  // namespace
+
+int RunColmapMapper(int argc, char** argv) {
+  std::string output_path;
+  return Translate("mapper", argc, argv, MapperOptions(&output_path),
+                   [&output_path](const ColmapTranslation& translation) {
+                     return RunMapperInto("mapper", output_path, translation);
+                   });
+}
+
+int RunColmapHierarchicalMapper(int argc, char** argv) {
+  std::string output_path;
+  std::vector<ColmapOption> table = MapperOptions(&output_path);
+  table.push_back(Value({"leaf_max_num_images"}, "--cluster-max-images"));
+  table.push_back(Value({"image_overlap"}, "--cluster-overlap"));
+  table.push_back(Ignored({"num_workers"}, "is set by --Mapper.num_threads and the cores"));
+  return Translate("hierarchical_mapper", argc, argv, table,
+                   [&output_path](ColmapTranslation translation) {
+                     translation.parallax_args.insert(translation.parallax_args.end(),
+                                                      {"--mapper", "hierarchical"});
+                     return RunMapperInto("hierarchical_mapper", output_path, translation);
+                   });
 }
 
 int RunColmapImageUndistorter(int argc, char** argv) {

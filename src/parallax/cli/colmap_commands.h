@@ -7,7 +7,11 @@ namespace parallax::cli {
 int RunColmapFeatureExtractor(int argc, char** argv);
 int RunColmapExhaustiveMatcher(int argc, char** argv);
 int RunColmapSequentialMatcher(int argc, char** argv);
+int RunColmapVocabTreeMatcher(int argc, char** argv);
+int RunColmapSpatialMatcher(int argc, char** argv);
 int RunColmapMapper(int argc, char** argv);
+int RunColmapHierarchicalMapper(int argc, char** argv);
+int RunColmapModelAnalyzer(int argc, char** argv);
 int RunColmapImageUndistorter(int argc, char** argv);
 int RunColmapModelAligner(int argc, char** argv);
 int RunColmapModelConverter(int argc, char** argv);

@@ -182,6 +182,35 @@ TEST_F(ColmapDropInTest, GaussianSplattingsConvertSequenceWithCOLMAP4Flags) {
   ExpectColmapLayout(source, 24);
 }
 
+// Retrieval pairs, the hierarchical mapper and the model tools, as scripts for larger sets
+// chain them (COLMAP's vocabulary tree file is not Parallax's: warned, not read).
+TEST_F(ColmapDropInTest, VocabTreeMatchingHierarchicalMappingAndTheModelTools) {
+  const fs::path source = RenderSource(24);
+  const std::string db = (source / "database.db").string();
+  const std::string input = (source / "input").string();
+  test::ProcessResult result = Colmap({"feature_extractor", "--database_path", db, "--image_path",
+                                       input, "--ImageReader.single_camera=1"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  result =
+      Colmap({"vocab_tree_matcher", "--database_path", db, "--VocabTreeMatching.vocab_tree_path",
+              "vocab_tree_flickr100K_words32K.bin", "--VocabTreeMatching.num_images", "20"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_NE(result.err.find("--VocabTreeMatching.vocab_tree_path is COLMAP's tree format"),
+            std::string::npos);
+  const fs::path sparse = source / "sparse";
+  result = Colmap({"hierarchical_mapper", "--database_path", db, "--image_path", input,
+                   "--output_path", sparse.string(), "--leaf_max_num_images", "12"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_EQ(ReadReconstruction(sparse / "0").NumRegImages(), 24u);
+  result = Colmap({"model_analyzer", "--path", (sparse / "0").string()});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_NE(result.out.find("images_registered: 24"), std::string::npos) << result.out;
+  result = Colmap({"model_converter", "--input_path", (sparse / "0").string(), "--output_path",
+                   (source / "text").string(), "--output_type", "TXT"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_TRUE(fs::exists(source / "text" / "images.txt"));
+}
+
 TEST_F(ColmapDropInTest, BadOptionsAndCommandsFailInOneLine) {
   test::ProcessResult result = Colmap({"feature_extractor", "--SiftExtraction.bogus", "1"});
   EXPECT_TRUE(result.ExitedWith(1));

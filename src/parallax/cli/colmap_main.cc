@@ -18,9 +18,13 @@ constexpr Command kCommands[] = {
     {"feature_extractor", parallax::cli::RunColmapFeatureExtractor},
     {"exhaustive_matcher", parallax::cli::RunColmapExhaustiveMatcher},
     {"sequential_matcher", parallax::cli::RunColmapSequentialMatcher},
+    {"vocab_tree_matcher", parallax::cli::RunColmapVocabTreeMatcher},
+    {"spatial_matcher", parallax::cli::RunColmapSpatialMatcher},
     {"mapper", parallax::cli::RunColmapMapper},
+    {"hierarchical_mapper", parallax::cli::RunColmapHierarchicalMapper},
     {"image_undistorter", parallax::cli::RunColmapImageUndistorter},
     {"model_aligner", parallax::cli::RunColmapModelAligner},
+    {"model_analyzer", parallax::cli::RunColmapModelAnalyzer},
     {"model_converter", parallax::cli::RunColmapModelConverter},
 };
 
