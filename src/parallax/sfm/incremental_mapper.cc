@@ -177,7 +177,6 @@ std::vector<Reconstruction> IncrementalMapper::Run(const Reconstruction* seed,
   std::vector<Reconstruction> models;
   std::vector<MapperModelReport> starts;  // How each kept model started.
   std::set<image_t> used_images;          // Registered in a kept model.
-  std::set<image_t> discarded_images;     // Registered only in models too small to keep.
   InitialPairLedger ledger;
   // Registrations over all models; images that never register leave it short of the total.
   std::optional<ProgressReporter> own_progress;
@@ -202,7 +201,6 @@ std::vector<Reconstruction> IncrementalMapper::Run(const Reconstruction* seed,
       // A start that went nowhere: its images stay free for later models to register, but
       // start none themselves.
       for (const image_t image_id : model.RegImageIds()) {
-        discarded_images.insert(image_id);
         ledger.failed_start_images.insert(image_id);
       }
       ++summary->num_discarded_models;
@@ -247,7 +245,7 @@ std::vector<Reconstruction> IncrementalMapper::Run(const Reconstruction* seed,
     if (report.model_index >= 0 || !report.reason.empty()) continue;
     if (input_.correspondence_graph.NeighborsOf(image_id).empty()) {
       report.reason = "no verified matches with any other image";
-    } else if (discarded_images.count(image_id)) {
+    } else if (ledger.failed_start_images.count(image_id)) {  // Only in discarded models.
       report.reason = "its model had fewer than " + std::to_string(options_.min_model_size) +
                       " images and was discarded";
     } else {

@@ -68,15 +68,20 @@ struct Walk {
     SynthesizeDataset(options, &truth);
     input = InputFromTruth(truth);
   }
+  // The input's cameras and images, none registered: what EvaluateInitialPair reads.
+  Reconstruction Unregistered() const {
+    Reconstruction unregistered;
+    for (const auto& [camera_id, camera] : input.cameras) unregistered.AddCamera(camera);
+    for (const auto& [image_id, image] : input.images) unregistered.AddImage(image);
+    return unregistered;
+  }
   Reconstruction truth;
   MapperInput input;
 };
 
 TEST(InitialPair, EvaluationMeasuresTheTrueAngleOfExactMatches) {
   const Walk walk;
-  Reconstruction unregistered;
-  for (const auto& [camera_id, camera] : walk.input.cameras) unregistered.AddCamera(camera);
-  for (const auto& [image_id, image] : walk.input.images) unregistered.AddImage(image);
+  const Reconstruction unregistered = walk.Unregistered();
   for (const auto& [pair_id, geometry] : walk.input.two_view_geometries) {
     const InitialPairEvaluation evaluation =
         EvaluateInitialPair(unregistered, pair_id, geometry, /*max_error_px=*/1.0);
@@ -107,9 +112,7 @@ TEST(InitialPair, TheModelStartsAtTheFirstStepSomePairMeets) {
   // (the pair that meets them need not be among those with most inliers).
   options.init_max_trials = 1;
   // Which step the schedule should stop at, from each pair's evaluation.
-  Reconstruction unregistered;
-  for (const auto& [camera_id, camera] : walk.input.cameras) unregistered.AddCamera(camera);
-  for (const auto& [image_id, image] : walk.input.images) unregistered.AddImage(image);
+  const Reconstruction unregistered = walk.Unregistered();
   int expected_step = -1;
   for (const InitThresholds& thresholds : InitThresholdSchedule(options)) {
     for (const auto& [pair_id, geometry] : walk.input.two_view_geometries) {

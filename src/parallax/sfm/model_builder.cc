@@ -152,22 +152,17 @@ bool ModelBuilder::InitializeFromPair(image_pair_t pair_id, const TwoViewGeometr
   const auto [image_id1, image_id2] = PairIdToImagePair(pair_id);
   const Image& image1 = reconstruction_.GetImage(image_id1);
   const Image& image2 = reconstruction_.GetImage(image_id2);
-  InitialPairEvaluation own_evaluation;
-  const InitialPairEvaluation* evaluation = &own_evaluation;
-  if (ledger != nullptr) {
-    auto it = ledger->evaluations.find(pair_id);
-    if (it == ledger->evaluations.end()) {
-      it = ledger->evaluations
-               .emplace(pair_id,
-                        EvaluateInitialPair(reconstruction_, pair_id, geometry,
-                                            options_.triangulation.max_reprojection_error_px))
-               .first;
-    }
-    evaluation = &it->second;
-  } else {
-    own_evaluation = EvaluateInitialPair(reconstruction_, pair_id, geometry,
-                                         options_.triangulation.max_reprojection_error_px);
+  InitialPairLedger own_ledger;  // A pair tried alone is evaluated and forgotten.
+  if (ledger == nullptr) ledger = &own_ledger;
+  auto it = ledger->evaluations.find(pair_id);
+  if (it == ledger->evaluations.end()) {
+    it =
+        ledger->evaluations
+            .emplace(pair_id, EvaluateInitialPair(reconstruction_, pair_id, geometry,
+                                                  options_.triangulation.max_reprojection_error_px))
+            .first;
   }
+  const InitialPairEvaluation* evaluation = &it->second;
   if (!evaluation->has_pose) return false;
   if (evaluation->num_triangulated < thresholds.min_num_inliers) {
     PARALLAX_LOG(Debug) << "mapper: initial pair " << image1.name << " + " << image2.name << ": "
@@ -182,7 +177,7 @@ bool ModelBuilder::InitializeFromPair(image_pair_t pair_id, const TwoViewGeometr
     return false;
   }
   // Tried once: a pair that fails from here on would fail again.
-  if (ledger != nullptr) ledger->started.insert(pair_id);
+  ledger->started.insert(pair_id);
   if (met_thresholds != nullptr) *met_thresholds = true;
 
   reconstruction_.GetImage(image_id1).cam_from_world = Rigid3d();

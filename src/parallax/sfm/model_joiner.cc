@@ -60,14 +60,7 @@ Reconstruction JoinModels(const ModelJoinerOptions& options,
       if (!joined.ExistsCamera(camera_id)) joined.AddCamera(camera);
     }
     for (const image_t image_id : model.RegImageIds()) {
-      const Image& image = model.GetImage(image_id);
-      Image pose_only;
-      pose_only.image_id = image_id;
-      pose_only.camera_id = image.camera_id;
-      pose_only.name = image.name;
-      pose_only.cam_from_world = TransformCameraPose(joined_from_model, image.cam_from_world);
-      joined.AddImage(pose_only);
-      joined.RegisterImage(image_id);
+      AddPoseOnlyImage(model, image_id, joined_from_model, &joined);
     }
     for (const auto& [track_id, point3D_id] : points[index]) {
       joined_xyz.try_emplace(track_id, joined_from_model * model.GetPoint3D(point3D_id).xyz);

@@ -94,6 +94,18 @@ ModelMergeReport EstimateMergedFromModel(const ModelMergerOptions& options,
 
 }  // namespace
 
+void AddPoseOnlyImage(const Reconstruction& model, image_t image_id, const Sim3d& into_from_model,
+                      Reconstruction* into) {
+  const Image& image = model.GetImage(image_id);
+  Image pose_only;
+  pose_only.image_id = image_id;
+  pose_only.camera_id = image.camera_id;
+  pose_only.name = image.name;
+  pose_only.cam_from_world = TransformCameraPose(into_from_model, image.cam_from_world);
+  into->AddImage(pose_only);
+  into->RegisterImage(image_id);
+}
+
 double MedianDistanceFromMedian(const std::vector<Eigen::Vector3d>& points) {
   Eigen::Vector3d median;
   for (int axis = 0; axis < 3; ++axis) {
@@ -127,14 +139,7 @@ Reconstruction MergeModels(const ModelMergerOptions& options,
     }
     for (const image_t image_id : model.RegImageIds()) {
       if (merged.ExistsImage(image_id)) continue;
-      const Image& image = model.GetImage(image_id);
-      Image pose_only;
-      pose_only.image_id = image_id;
-      pose_only.camera_id = image.camera_id;
-      pose_only.name = image.name;
-      pose_only.cam_from_world = TransformCameraPose(merged_from_model, image.cam_from_world);
-      merged.AddImage(pose_only);
-      merged.RegisterImage(image_id);
+      AddPoseOnlyImage(model, image_id, merged_from_model, &merged);
       added.push_back(image_id);
     }
     observations.Add(model, added, merged_from_model);

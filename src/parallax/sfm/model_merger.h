@@ -46,6 +46,12 @@ Reconstruction MergeModels(const ModelMergerOptions& options,
                            const std::vector<Reconstruction>& models,
                            std::vector<ModelMergeReport>* reports = nullptr);
 
+// Adds `model`'s image `image_id` to `into` (which must hold its camera), registered, with its
+// pose moved by `into_from_model` and no keypoints (the caller triangulates anew): how merged
+// and joined models take their images.
+void AddPoseOnlyImage(const Reconstruction& model, image_t image_id, const Sim3d& into_from_model,
+                      Reconstruction* into);
+
 // The median distance of the points from their per-axis median: a model's spread, for
 // thresholds that hold whatever its arbitrary scale.
 double MedianDistanceFromMedian(const std::vector<Eigen::Vector3d>& points);
