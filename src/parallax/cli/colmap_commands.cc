@@ -83,6 +83,10 @@ int Translate(const std::string& subcommand, int argc, char** argv,
   } catch (const InputError& error) {
     std::cerr << "error: " << error.what() << std::endl;
     return 1;
+  } catch (const std::filesystem::filesystem_error& error) {
+    // Moving the mapper's models into <output_path> (a full disk, a file in the way).
+    std::cerr << "error: colmap " << subcommand << ": " << error.what() << std::endl;
+    return 1;
   }
 }
 

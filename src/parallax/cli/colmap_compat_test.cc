@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -219,6 +220,19 @@ TEST_F(ColmapDropInTest, BadOptionsAndCommandsFailInOneLine) {
   result = Colmap({"no_such_command"});
   EXPECT_TRUE(result.ExitedWith(1));
   EXPECT_NE(result.err.find("unknown command 'no_such_command'"), std::string::npos);
+  // An output path that is a file: one line, not a crash.
+  const fs::path file = dir_.path() / "a_file";
+  std::ofstream(file) << "x";
+  const fs::path source = RenderSource(12);
+  const std::string db = (source / "database.db").string();
+  ASSERT_TRUE(Colmap({"feature_extractor", "--database_path", db, "--image_path",
+                      (source / "input").string()})
+                  .ExitedWith(0));
+  ASSERT_TRUE(Colmap({"exhaustive_matcher", "--database_path", db}).ExitedWith(0));
+  result = Colmap({"mapper", "--database_path", db, "--image_path", (source / "input").string(),
+                   "--output_path", file.string()});
+  EXPECT_TRUE(result.ExitedWith(1)) << result.err;
+  EXPECT_NE(result.err.find("error: colmap mapper: "), std::string::npos) << result.err;
   result = Colmap({"image_undistorter", "--output_type", "PMVS"});
   EXPECT_TRUE(result.ExitedWith(1));
   EXPECT_NE(result.err.find("--output_type PMVS is not supported"), std::string::npos);
