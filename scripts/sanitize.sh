@@ -48,7 +48,8 @@ cmake --build "$build" -j"$jobs"
 step "unit tests"
 export PARALLAX_DATA="${PARALLAX_DATA:-$(cd .. && pwd)/shared/data}"
 # Left out: the end-to-end runs on templeRing, the chessboard photos and the synthetic scenes
-# (30 views; 20 views mapped three times for added photos); the repeated reconstructions of
+# (30 views; 20 views mapped three times for added photos), the hard scenes (30 to 40 views)
+# and the colmap drop-in's full sequences (the end-to-end step below runs one); the repeated reconstructions of
 # the resume, determinism and rerun tests (the photo changed, touched or removed between two
 # runs; the same clusters mapped on other threads): one to three minutes each under ASan, and
 # the normal test job runs them; and two numerical tests whose tolerances hold for GCC's
@@ -57,7 +58,8 @@ export PARALLAX_DATA="${PARALLAX_DATA:-$(cd .. && pwd)/shared/data}"
 # (DistributedTest) are left out too: this build has no MPI.
 heavy='TempleRingTest\.|TempleRingFirstViews|TempleRingFigures|FramesTheTempleRing'
 heavy+='|CheckerboardDataset|SyntheticTempleThirtyViews|PhotosAddedLater|ResumeTest|DeterminismTest'
-heavy+='|SameResultWhicheverThreadMapsACluster|DistributedTest\.'
+heavy+='|SameResultWhicheverThreadMapsACluster|DistributedTest\.|HardScenesTest\.'
+heavy+='|ColmapDropInTest\.(GaussianSplattings|VocabTreeMatching)'
 heavy+='|UserFaultsTest\.(ReplacedPhoto|TouchedPhoto|RemovedPhoto|SecondRunOnTheSame)'
 # The weak scene's two models (TwoModelsOfOneRun...) form or not by clang's summation order:
 # under this build the relaxed-bars-off run already makes one model, so nothing is joined.
@@ -79,6 +81,20 @@ trap 'rm -rf "$scratch"' EXIT
 for format in nerfstudio ply bundler nvm; do
   "$build/parallax" export --model "$scratch/out/sparse/0" --format "$format" --output "$scratch/export-$format/model" -q
 done
+
+# The colmap drop-in: the sequence Gaussian splatting's convert.py runs, on the same views.
+colmap=("$build/colmap")
+mkdir -p "$scratch/dropin/input" "$scratch/dropin/distorted/sparse"
+cp "$scratch/scene"/*.png "$scratch/dropin/input/"
+"${colmap[@]}" feature_extractor --database_path "$scratch/dropin/distorted/database.db" \
+  --image_path "$scratch/dropin/input" --ImageReader.single_camera 1 --ImageReader.camera_model OPENCV
+"${colmap[@]}" exhaustive_matcher --database_path "$scratch/dropin/distorted/database.db"
+"${colmap[@]}" mapper --database_path "$scratch/dropin/distorted/database.db" \
+  --image_path "$scratch/dropin/input" --output_path "$scratch/dropin/distorted/sparse"
+"${colmap[@]}" image_undistorter --image_path "$scratch/dropin/input" \
+  --input_path "$scratch/dropin/distorted/sparse/0" --output_path "$scratch/dropin" --output_type COLMAP
+"${colmap[@]}" model_converter --input_path "$scratch/dropin/sparse" \
+  --output_path "$scratch/dropin/sparse" --output_type TXT
 
 step "fuzzers, ${fuzz_seconds} s each"
 for fuzzer in "$build"/fuzz/*_fuzz; do
