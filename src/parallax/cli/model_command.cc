@@ -1,8 +1,9 @@
-// parallax model convert|analyze|align|merge: tools for any COLMAP model.
+// parallax model convert|analyze|align|merge|adjust: tools for any COLMAP model.
 #include <iostream>
 
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
+#include "parallax/estimators/bundle_adjustment.h"
 #include "parallax/report/evaluation.h"
 #include "parallax/report/ground_truth.h"
 #include "parallax/report/model_union.h"
@@ -76,6 +77,51 @@ int RunModel(int argc, char** argv) {
   merge->add_option("--into", base, "Model folder it joins (its frame and shared poses stay)")
       ->required();
   merge->add_option("--output", output, "Folder of the merged model (binary and text)")->required();
+  merge->add_flag("--no-text", no_text, "Write the binary model only");
+
+  CLI::App* adjust = app.add_subcommand(
+      "adjust",
+      "Bundle-adjust a model as a whole: poses, points and the chosen intrinsics (COLMAP's "
+      "bundle_adjuster); the first pose and the scale stay");
+  adjust->add_option("--input", input, "Model folder")->required();
+  adjust->add_option("--output", output, "Folder of the adjusted model")->required();
+  // COLMAP's bundle_adjuster defaults: focal length and distortion free, principal point
+  // fixed, squared loss.
+  BundleAdjustmentOptions ba;
+  ba.refine_focal_length = true;
+  ba.refine_extra_params = true;
+  ba.loss_function = LossFunctionType::kTrivial;
+  bool fix_poses = false;
+  adjust->add_option("--refine-focal-length", ba.refine_focal_length, "Free the focal lengths")
+      ->capture_default_str();
+  adjust
+      ->add_option("--refine-principal-point", ba.refine_principal_point,
+                   "Free the principal points")
+      ->capture_default_str();
+  adjust
+      ->add_option("--refine-extra-params", ba.refine_extra_params,
+                   "Free the distortion parameters")
+      ->capture_default_str();
+  adjust->add_flag("--fix-poses", fix_poses, "Hold every pose: only points and intrinsics move");
+  adjust->add_option("--max-iterations", ba.max_num_iterations, "Levenberg-Marquardt iterations")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  adjust
+      ->add_option_function<std::string>(
+          "--loss",
+          [&ba](const std::string& name) {
+            ba.loss_function = LossFunctionTypeFromName(name).value();
+          },
+          "squared, huber, soft-l1 or cauchy")
+      ->check(CLI::IsMember({"cauchy", "huber", "soft-l1", "squared"}))
+      ->default_str("squared");
+  adjust
+      ->add_option("--loss-scale", ba.loss_scale_px,
+                   "Scale of a robust loss, pixels of reprojection error")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  adjust->add_option("--threads", ba.num_threads, "Threads (-1: all cores)")->capture_default_str();
+  adjust->add_flag("--no-text", no_text, "Write the binary model only");
 
   return RunCommand(app, argc, argv, flags, [&] {
     const Reconstruction model = ReadReconstruction(input);
@@ -100,12 +146,28 @@ int RunModel(int argc, char** argv) {
       ModelUnionReport report;
       const Reconstruction united = UniteModels(ReadReconstruction(base), base, model, &report);
       WriteReconstructionBinary(united, output);
-      WriteReconstructionText(united, output);
+      if (!no_text) WriteReconstructionText(united, output);
       std::cout << "model merge: " << report.num_shared_images << " shared images ("
                 << report.num_alignment_inliers << " agree, scale " << report.scale << "); "
                 << report.num_images_added << " images and " << report.num_points_added
                 << " points added; " << united.NumRegImages() << " images, " << united.NumPoints3D()
                 << " points -> " << output << "\n";
+    } else if (*adjust) {
+      Reconstruction adjusted = model;
+      const double error_before = adjusted.UpdatePointErrors();
+      const BundleAdjustmentSummary summary =
+          BundleAdjust(ba, WholeModelConfig(adjusted, fix_poses), &adjusted);
+      if (!summary.success) {
+        throw InputError("model adjust: " + input + ": the adjustment failed (" +
+                         summary.termination + ")");
+      }
+      const double error_after = adjusted.UpdatePointErrors();
+      WriteReconstructionBinary(adjusted, output);
+      if (!no_text) WriteReconstructionText(adjusted, output);
+      std::cout << "model adjust: " << adjusted.NumRegImages() << " images, "
+                << adjusted.NumPoints3D() << " points, " << summary.num_iterations
+                << " iterations (" << summary.solver << "); mean reprojection error "
+                << error_before << " -> " << error_after << " px -> " << output << "\n";
     } else if (plane) {
       Reconstruction aligned = model;
       const Sim3d aligned_from_model = PrincipalPlaneAlignment(model);

@@ -40,6 +40,25 @@ const char* LossFunctionName(LossFunctionType type) {
   return "unknown";
 }
 
+BundleAdjustmentConfig WholeModelConfig(const Reconstruction& reconstruction, bool fix_poses) {
+  BundleAdjustmentConfig config;
+  const std::vector<image_t> image_ids = reconstruction.RegImageIds();
+  for (const image_t image_id : image_ids) {
+    config.AddImage(image_id);
+    if (fix_poses) config.SetConstantPose(image_id);
+  }
+  if (!image_ids.empty()) config.SetConstantPose(image_ids[0]);
+  if (image_ids.size() > 1 && !fix_poses) {
+    // The largest coordinate: one near zero would leave the scale free.
+    int coordinate = 0;
+    reconstruction.GetImage(image_ids[1])
+        .cam_from_world.translation.cwiseAbs()
+        .maxCoeff(&coordinate);
+    config.constant_translation_coordinates.insert({image_ids[1], coordinate});
+  }
+  return config;
+}
+
 void BundleAdjustmentOptions::Check() const {
   PARALLAX_CHECK_GE(max_dense_schur_variables, 0);
   PARALLAX_CHECK_GE(conjugate_gradient.max_num_iterations, 1);

@@ -68,6 +68,12 @@ struct BundleAdjustmentConfig {
   void SetConstantPose(image_t image_id) { constant_poses.insert(image_id); }
 };
 
+// Every registered image of `reconstruction`, the gauge fixed as COLMAP's bundle_adjuster
+// fixes it: the first image's pose and the largest coordinate of the second's translation
+// (the scale).
+// With `fix_poses`, every pose is constant: only points (and free intrinsics) move.
+BundleAdjustmentConfig WholeModelConfig(const Reconstruction& reconstruction, bool fix_poses);
+
 struct BundleAdjustmentSummary {
   bool success = false;
   double initial_cost = 0;  // Ceres cost (0.5 sum of squared robustified residuals).

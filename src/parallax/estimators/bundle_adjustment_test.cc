@@ -86,18 +86,6 @@ Reconstruction SynthesizeScene(const SceneOptions& options) {
   return reconstruction;
 }
 
-// Fixes the similarity gauge: the first pose and the largest translation coordinate of the
-// second image.
-BundleAdjustmentConfig GaugeFixedConfig(const Reconstruction& reconstruction) {
-  BundleAdjustmentConfig config;
-  for (const image_t image_id : reconstruction.RegImageIds()) config.AddImage(image_id);
-  config.SetConstantPose(1);
-  int coordinate = 0;
-  reconstruction.GetImage(2).cam_from_world.translation.cwiseAbs().maxCoeff(&coordinate);
-  config.constant_translation_coordinates.insert({2, coordinate});
-  return config;
-}
-
 // Moves every variable quantity of `config` away from the truth.
 void Perturb(const BundleAdjustmentConfig& config, double rotation_deg, double translation,
              double point_offset, Reconstruction* reconstruction) {
@@ -167,7 +155,7 @@ class BundleAdjustmentSolvers : public ::testing::TestWithParam<BundleAdjustment
 TEST_P(BundleAdjustmentSolvers, RecoversNoiselessSceneExactly) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   Perturb(config, 1.0, 0.05, 0.05, &estimate);
   EXPECT_GT(CompareToTruth(truth, estimate).max_point, 0.05);
 
@@ -191,13 +179,30 @@ TEST_P(BundleAdjustmentSolvers, RecoversNoiselessSceneExactly) {
   EXPECT_EQ(estimate.GetCamera(1).params, truth.GetCamera(1).params);
 }
 
+// COLMAP's point_triangulator adjusts with the poses given: only the points move back.
+TEST_P(BundleAdjustmentSolvers, FixedPosesMoveOnlyThePoints) {
+  const Reconstruction truth = SynthesizeScene({});
+  Reconstruction estimate = truth;
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/true);
+  EXPECT_EQ(config.constant_poses.size(), truth.NumRegImages());
+  EXPECT_TRUE(config.constant_translation_coordinates.empty());
+  Perturb(config, 1.0, 0.05, 0.05, &estimate);
+  const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(GetParam()), config, &estimate);
+  ASSERT_TRUE(summary.success) << summary.termination;
+  EXPECT_LT(CompareToTruth(truth, estimate).max_point, 1e-6);
+  for (const image_t image_id : truth.RegImageIds()) {
+    EXPECT_EQ(estimate.GetImage(image_id).cam_from_world.translation,
+              truth.GetImage(image_id).cam_from_world.translation);
+  }
+}
+
 TEST_P(BundleAdjustmentSolvers, NoisyObservationsReachNoiseLevel) {
   SetPRNGSeed(3);  // Both solvers see the same scene, whichever tests ran before.
   SceneOptions scene;
   scene.noise_px = 0.5;
   const Reconstruction truth = SynthesizeScene(scene);
   Reconstruction estimate = truth;
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   Perturb(config, 0.5, 0.02, 0.02, &estimate);
   const double initial_error = estimate.UpdatePointErrors();
 
@@ -221,7 +226,7 @@ TEST_P(BundleAdjustmentSolvers, NoisyObservationsReachNoiseLevel) {
 TEST_P(BundleAdjustmentSolvers, RefinesFocalLength) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   Perturb(config, 0.2, 0.01, 0.01, &estimate);
   estimate.GetCamera(1).SetFocalLength(1.05 * kFocalLength);
 
@@ -241,7 +246,7 @@ TEST_P(BundleAdjustmentSolvers, RefinesFocalLength) {
 TEST_P(BundleAdjustmentSolvers, RefinesPrincipalPointAndDistortionOnly) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   Camera& camera = estimate.GetCamera(1);
   camera.params[1] += 5;
   camera.params[2] -= 4;
@@ -259,7 +264,7 @@ TEST_P(BundleAdjustmentSolvers, RefinesPrincipalPointAndDistortionOnly) {
 }
 
 // A scene with 0.3 px of noise, about 5 % of its observations moved 10 to 50 px in a random
-// direction, and its poses, points and gauge as GaugeFixedConfig and Perturb leave them.
+// direction, and its poses, points and gauge as WholeModelConfig and Perturb leave them.
 struct SceneWithOutliers {
   Reconstruction truth, corrupted;
   BundleAdjustmentConfig config;
@@ -283,7 +288,7 @@ SceneWithOutliers MakeSceneWithOutliers() {
       ++scene.num_outliers;
     }
   }
-  scene.config = GaugeFixedConfig(scene.truth);
+  scene.config = WholeModelConfig(scene.truth, /*fix_poses=*/false);
   Perturb(scene.config, 0.5, 0.02, 0.02, &scene.corrupted);
   return scene;
 }
@@ -393,7 +398,7 @@ TEST_P(BundleAdjustmentSolvers, ScatteredImageIdsGiveTheSameAdjustment) {
 TEST_P(BundleAdjustmentSolvers, ConstantCamerasAndPointsStayFixed) {
   const Reconstruction truth = SynthesizeScene({});
   Reconstruction estimate = truth;
-  BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   config.constant_cameras.insert(1);
   for (point3D_t point3D_id = 1; point3D_id <= 10; ++point3D_id) {
     config.constant_points.insert(point3D_id);
@@ -418,7 +423,7 @@ TEST_P(BundleAdjustmentSolvers, LargeProblem) {
   scene.track_length = 6;
   const Reconstruction truth = SynthesizeScene(scene);
   Reconstruction estimate = truth;
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   Perturb(config, 0.3, 0.01, 0.01, &estimate);
   const BundleAdjustmentSummary summary = BundleAdjust(TightOptions(GetParam()), config, &estimate);
   ASSERT_TRUE(summary.success) << summary.termination;
@@ -445,7 +450,7 @@ TEST_P(BundleAdjustmentSolvers, EmptyOrUnobservedConfigFailsGracefully) {
   EXPECT_EQ(summary.num_residuals, 0u);
 
   // Together with observed images, the unobserved one is simply skipped.
-  config = GaugeFixedConfig(reconstruction);
+  config = WholeModelConfig(reconstruction, /*fix_poses=*/false);
   config.images.erase(100);
   config.AddImage(100);
   EXPECT_TRUE(BundleAdjust(SolverOptions(GetParam()), config, &reconstruction).success);
@@ -476,7 +481,7 @@ TEST(BundleAdjustment, SolversReachTheSameMinimum) {
   scene.track_length = 5;
   scene.noise_px = 0.5;
   const Reconstruction truth = SynthesizeScene(scene);
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   Reconstruction perturbed = truth;
   Perturb(config, 0.3, 0.01, 0.01, &perturbed);
   perturbed.GetCamera(1).params[0] *= 1.02;
@@ -522,7 +527,7 @@ TEST(BundleAdjustment, AutoPicksSolverBySize) {
   scene.num_points = 100;
   scene.track_length = 4;
   Reconstruction reconstruction = SynthesizeScene(scene);
-  const BundleAdjustmentConfig config = GaugeFixedConfig(reconstruction);
+  const BundleAdjustmentConfig config = WholeModelConfig(reconstruction, /*fix_poses=*/false);
   BundleAdjustmentOptions options;
   EXPECT_EQ(BundleAdjust(options, config, &reconstruction).solver, "dense Schur LM");
   options.max_dense_schur_variables = 6 * 18;  // 19 variable poses need 114.
@@ -605,7 +610,7 @@ TEST(BundleAdjustment, DISABLED_Timing47Images8000Points) {
   scene.noise_px = 0.5;
   const Reconstruction truth = SynthesizeScene(scene);
   Reconstruction perturbed = truth;
-  const BundleAdjustmentConfig config = GaugeFixedConfig(truth);
+  const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
   Perturb(config, 0.3, 0.01, 0.01, &perturbed);
   for (const auto solver : {BundleAdjustmentSolver::kDenseSchur, BundleAdjustmentSolver::kCeres}) {
     BundleAdjustmentOptions options = SolverOptions(solver);
