@@ -14,8 +14,9 @@ int RunMapper(int argc, char** argv) {
   std::string database_path, image_path, output;
   MappingStageOptions options;
   app.add_option("--database", database_path, "Feature and match database")->required();
-  app.add_option("--image-path", image_path, "Folder of the images (for point colours)")
-      ->required();
+  app.add_option("--image-path", image_path,
+                 "Folder of the images, for point colours the database did not store (without "
+                 "it those points stay black, as COLMAP's image_registrator leaves them)");
   app.add_option("--output", output, "Output folder (sparse/<k>/, points.ply, summary.json)")
       ->required();
   AddSeedOption(app, &options.mapper.seed);

@@ -13,6 +13,10 @@ void AddMapperOptions(CLI::App& app, MappingStageOptions* options) {
                  "Extend this model (COLMAP format, e.g. OUT/sparse/0): its images keep their "
                  "poses and the database's other images are registered into it (COLMAP's "
                  "mapper --input_path)");
+  app.add_flag("--fixed-poses", options->fixed_poses,
+               "With --input-model: register nothing; triangulate the database's tracks into "
+               "its poses, which stay as given (COLMAP's point_triangulator)")
+      ->needs("--input-model");
   app.add_option("--init-min-inliers", mapper.init_min_num_inliers,
                  "Points the initial pair must triangulate")
       ->capture_default_str();

@@ -10,6 +10,7 @@
 
 #include "parallax/image/image_reader.h"
 #include "parallax/scene/colmap_io.h"
+#include "parallax/sfm/point_triangulator.h"
 #include "parallax/util/check.h"
 #include "parallax/util/file.h"
 #include "parallax/util/logging.h"
@@ -27,6 +28,7 @@ void MappingStageOptions::Check() const {
   PARALLAX_CHECK_MSG(write_text || write_binary, "at least one model format must be written");
   PARALLAX_CHECK_MSG(input_model.empty() || mapper_type == MapperType::kIncremental,
                      "an input model is extended by the incremental mapper");
+  PARALLAX_CHECK_MSG(!fixed_poses || !input_model.empty(), "fixed poses come from an input model");
 }
 
 void ColorizePoints(const std::filesystem::path& image_dir, const Database* database,
@@ -57,6 +59,7 @@ void ColorizePoints(const std::filesystem::path& image_dir, const Database* data
       }
       return;
     }
+    if (image_dir.empty()) return;  // No images given: the colours stay unset.
     Bitmap bitmap;
     try {
       bitmap = ReadBitmap(image_dir / image.name);
@@ -205,8 +208,12 @@ MappingStageResult RunMappingStage(const MappingStageOptions& options, const Dat
                             << " are no longer in the database and are left out (first: "
                             << result.input_model_images_missing.front() << ")";
     }
-    IncrementalMapper mapper(options.mapper, input);
-    result.models = mapper.Extend(seed, &result.summary);
+    if (options.fixed_poses) {
+      result.models = {TriangulateIntoPoses(options.mapper, input, seed, &result.summary)};
+    } else {
+      IncrementalMapper mapper(options.mapper, input);
+      result.models = mapper.Extend(seed, &result.summary);
+    }
   } else {
     IncrementalMapper mapper(options.mapper, input);
     result.models = mapper.Reconstruct(&result.summary);

@@ -33,6 +33,9 @@ struct MappingStageOptions {
   // registered into it; its points are triangulated anew from the database. Empty: map from
   // scratch.
   std::filesystem::path input_model;
+  // With input_model: register nothing, only triangulate the database's tracks into its fixed
+  // poses (COLMAP's point_triangulator; TriangulateIntoPoses).
+  bool fixed_poses = false;
   bool write_text = true;    // cameras.txt, images.txt, points3D.txt
   bool write_binary = true;  // the .bin twins
   void Check() const;
@@ -76,8 +79,8 @@ void WriteClusterFiles(const MapperInput& input, const std::vector<std::vector<i
 
 // Sets every point's colour to the mean colour of its observations: from the keypoint colours
 // `database` (optional) stored at extraction for an image of the same name and as many
-// keypoints as the model's image has points, else from the image in `image_dir`. Images that
-// cannot be read are skipped with a warning.
+// keypoints as the model's image has points, else from the image in `image_dir` (empty: none,
+// left black). Images that cannot be read are skipped with a warning.
 void ColorizePoints(const std::filesystem::path& image_dir, const Database* database,
                     Reconstruction* reconstruction);
 
