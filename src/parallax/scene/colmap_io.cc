@@ -371,6 +371,38 @@ void WritePoints3DText(const Reconstruction& reconstruction, std::ostream& strea
   }
 }
 
+// COLMAP 4's rigs and frames, for a model without rigs: one rig per camera (its id, the camera
+// its only sensor) and one frame per registered image (its id, the image its only data), the
+// rig's pose the camera's. COLMAP 4 writes them beside every model; 3.x ignores them.
+constexpr int32_t kCameraSensorType = 0;  // COLMAP's SensorType::CAMERA.
+
+void WriteRigsText(const Reconstruction& reconstruction, std::ostream& stream) {
+  stream << "# Rig calib list with one line of data per calib:\n"
+         << "#   RIG_ID, NUM_SENSORS, REF_SENSOR_TYPE, REF_SENSOR_ID, SENSORS[] as (SENSOR_TYPE, "
+            "SENSOR_ID, HAS_POSE, [QW, QX, QY, QZ, TX, TY, TZ])\n"
+         << "# Number of rigs: " << reconstruction.NumCameras() << "\n";
+  for (const auto& [camera_id, camera] : reconstruction.Cameras()) {
+    stream << camera_id << " 1 CAMERA " << camera_id << "\n";
+  }
+}
+
+void WriteFramesText(const Reconstruction& reconstruction, std::ostream& stream) {
+  const PrecisionGuard guard(stream);
+  stream << "# Frame list with one line of data per frame:\n"
+         << "#   FRAME_ID, RIG_ID, RIG_FROM_WORLD[QW, QX, QY, QZ, TX, TY, TZ], NUM_DATA_IDS, "
+            "DATA_IDS[] as (SENSOR_TYPE, SENSOR_ID, DATA_ID)\n"
+         << "# Number of frames: " << reconstruction.NumRegImages() << "\n";
+  for (const auto& [image_id, image] : reconstruction.Images()) {
+    if (!image.registered) continue;
+    const Eigen::Quaterniond& q = image.cam_from_world.rotation;
+    const Eigen::Vector3d& t = image.cam_from_world.translation;
+    stream << image_id << " " << image.camera_id << " " << Digits17{q.w()} << " " << Digits17{q.x()}
+           << " " << Digits17{q.y()} << " " << Digits17{q.z()} << " " << Digits17{t.x()} << " "
+           << Digits17{t.y()} << " " << Digits17{t.z()} << " 1 CAMERA " << image.camera_id << " "
+           << image_id << "\n";
+  }
+}
+
 // ------------------------------------------------------------------------------------------
 // Binary writers.
 
@@ -401,6 +433,32 @@ void WriteImagesBinary(const Reconstruction& reconstruction, std::ostream& strea
       WriteBinary<double>(stream, point2D.xy.y());
       WriteBinary<uint64_t>(stream, point2D.point3D_id);  // kInvalidPoint3DId is uint64 max.
     }
+  }
+}
+
+void WriteRigsBinary(const Reconstruction& reconstruction, std::ostream& stream) {
+  WriteBinary<uint64_t>(stream, reconstruction.NumCameras());
+  for (const auto& [camera_id, camera] : reconstruction.Cameras()) {
+    WriteBinary<uint32_t>(stream, camera_id);  // Rig id.
+    WriteBinary<uint32_t>(stream, 1);          // Sensors: the reference one only.
+    WriteBinary<int32_t>(stream, kCameraSensorType);
+    WriteBinary<uint32_t>(stream, camera_id);
+  }
+}
+
+void WriteFramesBinary(const Reconstruction& reconstruction, std::ostream& stream) {
+  WriteBinary<uint64_t>(stream, reconstruction.NumRegImages());
+  for (const auto& [image_id, image] : reconstruction.Images()) {
+    if (!image.registered) continue;
+    WriteBinary<uint32_t>(stream, image_id);         // Frame id.
+    WriteBinary<uint32_t>(stream, image.camera_id);  // Rig id.
+    const Eigen::Quaterniond& q = image.cam_from_world.rotation;
+    for (const double value : {q.w(), q.x(), q.y(), q.z()}) WriteBinary<double>(stream, value);
+    for (int c = 0; c < 3; ++c) WriteBinary<double>(stream, image.cam_from_world.translation[c]);
+    WriteBinary<uint32_t>(stream, 1);  // Data ids: the image.
+    WriteBinary<int32_t>(stream, kCameraSensorType);
+    WriteBinary<uint32_t>(stream, image.camera_id);
+    WriteBinary<uint64_t>(stream, image_id);
   }
 }
 
@@ -627,6 +685,10 @@ void WriteReconstructionText(const Reconstruction& reconstruction,
                       [&](std::ostream& stream) { WriteImagesText(reconstruction, stream); });
   WriteFileAtomically(dir / "points3D.txt",
                       [&](std::ostream& stream) { WritePoints3DText(reconstruction, stream); });
+  WriteFileAtomically(dir / "rigs.txt",
+                      [&](std::ostream& stream) { WriteRigsText(reconstruction, stream); });
+  WriteFileAtomically(dir / "frames.txt",
+                      [&](std::ostream& stream) { WriteFramesText(reconstruction, stream); });
 }
 
 void WriteReconstructionBinary(const Reconstruction& reconstruction,
@@ -641,6 +703,12 @@ void WriteReconstructionBinary(const Reconstruction& reconstruction,
   WriteFileAtomically(
       dir / "points3D.bin",
       [&](std::ostream& stream) { WritePoints3DBinary(reconstruction, stream); }, true);
+  WriteFileAtomically(
+      dir / "rigs.bin", [&](std::ostream& stream) { WriteRigsBinary(reconstruction, stream); },
+      true);
+  WriteFileAtomically(
+      dir / "frames.bin", [&](std::ostream& stream) { WriteFramesBinary(reconstruction, stream); },
+      true);
 }
 
 bool HasColmapModel(const std::filesystem::path& dir) {

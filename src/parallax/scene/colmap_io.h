@@ -8,9 +8,11 @@
 namespace parallax {
 
 // COLMAP's model formats: cameras.txt/images.txt/points3D.txt and the .bin twins, byte
-// compatible with COLMAP 3.8. Stream functions for in-memory round trips; path functions
-// write atomically (temp file + rename). Readers throw InputError "<file>:<line>: <reason>"
-// on malformed input, including dangling ids (an image's camera or a track's image missing).
+// compatible with COLMAP 3.8, and COLMAP 4's rigs and frames beside them (one rig per camera,
+// one frame per registered image; read models' rigs and frames are not used yet). Stream functions
+// for in-memory round trips; path functions write atomically (temp file + rename). Readers throw
+// InputError "<file>:<line>: <reason>" on malformed input, including dangling ids (an image's
+// camera or a track's image missing).
 
 void WriteCamerasText(const Reconstruction& reconstruction, std::ostream& stream);
 void WriteImagesText(const Reconstruction& reconstruction, std::ostream& stream);
@@ -18,6 +20,10 @@ void WritePoints3DText(const Reconstruction& reconstruction, std::ostream& strea
 void WriteCamerasBinary(const Reconstruction& reconstruction, std::ostream& stream);
 void WriteImagesBinary(const Reconstruction& reconstruction, std::ostream& stream);
 void WritePoints3DBinary(const Reconstruction& reconstruction, std::ostream& stream);
+void WriteRigsText(const Reconstruction& reconstruction, std::ostream& stream);
+void WriteFramesText(const Reconstruction& reconstruction, std::ostream& stream);
+void WriteRigsBinary(const Reconstruction& reconstruction, std::ostream& stream);
+void WriteFramesBinary(const Reconstruction& reconstruction, std::ostream& stream);
 
 // `source` names the stream in error messages.
 void ReadCamerasText(std::istream& stream, const std::string& source,
@@ -33,7 +39,7 @@ void ReadImagesBinary(std::istream& stream, const std::string& source,
 void ReadPoints3DBinary(std::istream& stream, const std::string& source,
                         Reconstruction* reconstruction);
 
-// Writes the three .txt files or the three .bin files into `dir` (created if missing).
+// Writes the five .txt files or the five .bin files into `dir` (created if missing).
 void WriteReconstructionText(const Reconstruction& reconstruction,
                              const std::filesystem::path& dir);
 void WriteReconstructionBinary(const Reconstruction& reconstruction,

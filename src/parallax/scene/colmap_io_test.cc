@@ -264,12 +264,58 @@ TEST(ColmapIo, BinaryLayoutMatchesColmap) {
   EXPECT_EQ(fy, 100.0);
 }
 
+// COLMAP 4's rigs.bin and frames.bin for a model without rigs, in the layout COLMAP 4.2
+// writes for one (checked against its model_converter output): a rig per camera, a frame per
+// registered image with the image's pose.
+TEST(ColmapIo, RigsAndFramesLayoutMatchesColmap4) {
+  const Reconstruction reconstruction = MakeReconstruction();
+  std::ostringstream rigs, frames;
+  WriteRigsBinary(reconstruction, rigs);
+  WriteFramesBinary(reconstruction, frames);
+  // uint64 count; per rig uint32 id, uint32 sensors, int32 type, uint32 sensor id.
+  const std::string rig_bytes = rigs.str();
+  ASSERT_EQ(rig_bytes.size(), 8u + 2 * 16);
+  uint32_t words[4];
+  std::memcpy(words, rig_bytes.data() + 8 + 16, 16);  // The second rig: camera 7.
+  EXPECT_EQ(words[0], 7u);
+  EXPECT_EQ(words[1], 1u);
+  EXPECT_EQ(words[2], 0u);  // CAMERA.
+  EXPECT_EQ(words[3], 7u);
+  // Per frame: uint32 id, uint32 rig, 7 doubles, uint32 data ids, int32 type, uint32 sensor,
+  // uint64 image: 84 bytes; image 11 is not registered.
+  const std::string frame_bytes = frames.str();
+  ASSERT_EQ(frame_bytes.size(), 8u + 3 * 84);
+  const char* second = frame_bytes.data() + 8 + 84;  // Image 5, camera 7.
+  uint32_t frame_id, rig_id, num_data, sensor_id;
+  double qw, tz;
+  uint64_t data_id;
+  std::memcpy(&frame_id, second, 4);
+  std::memcpy(&rig_id, second + 4, 4);
+  std::memcpy(&qw, second + 8, 8);
+  std::memcpy(&tz, second + 8 + 6 * 8, 8);
+  std::memcpy(&num_data, second + 64, 4);
+  std::memcpy(&sensor_id, second + 72, 4);
+  std::memcpy(&data_id, second + 76, 8);
+  const Image& image = reconstruction.GetImage(5);
+  EXPECT_EQ(frame_id, 5u);
+  EXPECT_EQ(rig_id, 7u);
+  EXPECT_EQ(qw, image.cam_from_world.rotation.w());
+  EXPECT_EQ(tz, image.cam_from_world.translation.z());
+  EXPECT_EQ(num_data, 1u);
+  EXPECT_EQ(sensor_id, 7u);
+  EXPECT_EQ(data_id, 5u);
+  std::ostringstream frames_text;
+  WriteFramesText(reconstruction, frames_text);
+  EXPECT_NE(frames_text.str().find("\n5 7 "), std::string::npos);
+  EXPECT_NE(frames_text.str().find(" 1 CAMERA 7 5\n"), std::string::npos);
+}
+
 TEST(ColmapIo, TextFilesAndBinaryFilesReadTheSame) {
   const Reconstruction reconstruction = MakeReconstruction();
   const TempDir temp;
   WriteReconstructionText(reconstruction, temp.path() / "text");
   WriteReconstructionBinary(reconstruction, temp.path() / "binary");
-  for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
+  for (const char* name : {"cameras.txt", "images.txt", "points3D.txt", "rigs.txt", "frames.txt"}) {
     EXPECT_TRUE(std::filesystem::exists(temp.path() / "text" / name));
   }
   const Reconstruction from_text = ReadReconstruction(temp.path() / "text");
@@ -282,7 +328,7 @@ TEST(ColmapIo, TextFilesAndBinaryFilesReadTheSame) {
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos);
     ++num_files;
   }
-  EXPECT_EQ(num_files, 3u);
+  EXPECT_EQ(num_files, 5u);  // cameras, images, points3D, rigs, frames.
 }
 
 TEST(ColmapIo, ReadReconstructionPrefersBinary) {
