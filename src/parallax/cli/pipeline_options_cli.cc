@@ -85,9 +85,14 @@ void AddMatchingOptions(CLI::App& app, MatchingStageOptions* options) {
          "--pairs", [&pairs](const std::string& name) { pairs.mode = *PairModeFromName(name); },
          "Which pairs to match: auto (exhaustive up to --auto-exhaustive-max-images, "
          "retrieval above, plus spatial when images have GPS), exhaustive, sequential "
-         "(name order), retrieval (vocabulary tree) or spatial (EXIF GPS neighbours)")
+         "(name order), retrieval (vocabulary tree), spatial (EXIF GPS neighbours) or list "
+         "(the pairs --pair-list names)")
       ->default_str("auto")
-      ->check(CLI::IsMember({"auto", "exhaustive", "sequential", "retrieval", "spatial"}));
+      ->check(CLI::IsMember({"auto", "exhaustive", "sequential", "retrieval", "spatial", "list"}));
+  app.add_option("--pair-list", pairs.pair_list_path,
+                 "List mode: a text file of pairs, two image names per line (COLMAP's "
+                 "matches_importer --match_type pairs)")
+      ->check(CLI::ExistingFile);
   app.add_option("--auto-exhaustive-max-images", pairs.auto_exhaustive_max_images,
                  "Auto mode: match every pair up to this many images")
       ->capture_default_str()

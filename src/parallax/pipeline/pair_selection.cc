@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <deque>
+#include <fstream>
 #include <numeric>
 #include <random>
 #include <set>
+#include <sstream>
 #include <tuple>
 #include <unordered_map>
 
@@ -135,7 +137,7 @@ std::vector<ImagePair> SelectSpatialPairs(
 
 std::optional<PairMode> PairModeFromName(const std::string& name) {
   for (const PairMode mode : {PairMode::kAuto, PairMode::kExhaustive, PairMode::kSequential,
-                              PairMode::kRetrieval, PairMode::kSpatial}) {
+                              PairMode::kRetrieval, PairMode::kSpatial, PairMode::kList}) {
     if (name == PairModeName(mode)) return mode;
   }
   return std::nullopt;
@@ -153,6 +155,8 @@ std::string PairModeName(PairMode mode) {
       return "retrieval";
     case PairMode::kSpatial:
       return "spatial";
+    case PairMode::kList:
+      return "list";
   }
   return "unknown";
 }
@@ -331,6 +335,33 @@ std::vector<ImagePair> OrderPairsForLocality(std::vector<ImagePair> pairs,
   return pairs;
 }
 
+std::vector<std::pair<image_t, image_t>> ReadPairList(const std::filesystem::path& path,
+                                                      const Database& database) {
+  std::ifstream stream(path);
+  if (!stream) throw MissingFileError(path.string() + ": cannot open the pair list");
+  std::vector<std::pair<image_t, image_t>> pairs;
+  std::set<image_pair_t> seen;
+  std::string line;
+  for (int line_number = 1; std::getline(stream, line); ++line_number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::string where = path.string() + ":" + std::to_string(line_number) + ": ";
+    std::istringstream fields(line);
+    std::string name1, name2, extra;
+    if (!(fields >> name1) || name1[0] == '#') continue;  // Blank or a comment.
+    if (!(fields >> name2) || (fields >> extra)) {
+      throw InputError(where + "expected two image names apart by a space");
+    }
+    std::optional<image_t> id1 = database.ImageIdByName(name1);
+    std::optional<image_t> id2 = database.ImageIdByName(name2);
+    for (const auto& [name, id] : {std::pair{name1, id1}, std::pair{name2, id2}}) {
+      if (!id) throw InputError(where + "image '" + name + "' is not in the database");
+    }
+    if (*id1 == *id2 || !seen.insert(ImagePairToPairId(*id1, *id2)).second) continue;
+    pairs.emplace_back(std::min(*id1, *id2), std::max(*id1, *id2));
+  }
+  return pairs;
+}
+
 std::filesystem::path DefaultVocabTreePath(const std::filesystem::path& database_path) {
   std::filesystem::path path = database_path;
   return path.replace_extension(".vocab_tree");
@@ -346,6 +377,9 @@ PairMode ResolvedPairMode(const PairSelectionOptions& options, size_t num_images
 PairSelection SelectPairs(const PairSelectionOptions& options,
                           const std::vector<image_t>& image_ids, const Database& database,
                           uint64_t seed) {
+  if (options.mode == PairMode::kList && options.pair_list_path.empty()) {
+    throw InputError("--pairs list needs --pair-list FILE (two image names per line)");
+  }
   options.Check();
   const Timer timer;
   PairSelection selection;
@@ -383,6 +417,10 @@ PairSelection SelectPairs(const PairSelectionOptions& options,
         break;
       case PairMode::kSequential:
         selection.pairs = SequentialPairs(image_ids, options.sequential_overlap);
+        break;
+      case PairMode::kList:
+        selection.pairs = ReadPairList(options.pair_list_path, database);
+        selection.reason += " (" + options.pair_list_path.string() + ")";
         break;
       case PairMode::kRetrieval: {
         const std::vector<ImagePair> found =

@@ -19,9 +19,11 @@ enum class PairMode {
   kSequential,  // Each image with the next `sequential_overlap` images in name order.
   kRetrieval,   // Each image with the images a vocabulary tree finds most alike.
   kSpatial,     // Each image with its nearest neighbours by EXIF GPS position.
+  kList,        // The pairs a text file names (COLMAP's matches_importer --match_type pairs).
 };
 
-// "auto", "exhaustive", "sequential", "retrieval", "spatial"; nullopt for anything else.
+// "auto", "exhaustive", "sequential", "retrieval", "spatial", "list"; nullopt for anything
+// else.
 std::optional<PairMode> PairModeFromName(const std::string& name);
 std::string PairModeName(PairMode mode);
 
@@ -72,6 +74,8 @@ struct PairSelectionOptions {
   double auto_spatial_min_gps_share = 0.5;
   RetrievalPairOptions retrieval;
   SpatialPairOptions spatial;
+  // List mode: one pair per line, two image names apart by a space ('#' starts a comment).
+  std::filesystem::path pair_list_path;
   // Threads for training the tree and quantizing descriptors (-1: all cores).
   int num_threads = -1;
   void Check() const;
@@ -116,6 +120,13 @@ std::vector<std::pair<image_t, image_t>> LoopClosingPairs(
 // order position first.
 std::vector<std::pair<image_t, image_t>> OrderPairsForLocality(
     std::vector<std::pair<image_t, image_t>> pairs, const std::vector<image_t>& image_ids);
+
+// The pairs of a list file (PairSelectionOptions::pair_list_path), by image name in `database`;
+// a pair given twice or in both orders counts once, an image paired with itself is skipped.
+// Throws InputError "<file>:<line>: <reason>" for a line without two names or a name the
+// database does not hold.
+std::vector<std::pair<image_t, image_t>> ReadPairList(const std::filesystem::path& path,
+                                                      const Database& database);
 
 // Where the tree trained for a database is saved: beside it, `<stem>.vocab_tree`.
 std::filesystem::path DefaultVocabTreePath(const std::filesystem::path& database_path);

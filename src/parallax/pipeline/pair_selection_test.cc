@@ -25,10 +25,42 @@ std::set<ImagePair> AsSet(const std::vector<ImagePair>& pairs) {
 
 TEST(PairSelection, ModeNamesRoundTrip) {
   for (const PairMode mode : {PairMode::kAuto, PairMode::kExhaustive, PairMode::kSequential,
-                              PairMode::kRetrieval, PairMode::kSpatial}) {
+                              PairMode::kRetrieval, PairMode::kSpatial, PairMode::kList}) {
     EXPECT_EQ(PairModeFromName(PairModeName(mode)), mode);
   }
   EXPECT_FALSE(PairModeFromName("vocab_tree").has_value());
+}
+
+// COLMAP's matches_importer pair list: names to ids, repeats and self-pairs dropped, and a bad
+// line or an unknown name named with its file and line.
+TEST(PairSelection, PairListReadsNamesAndNamesItsErrors) {
+  const test::ScopedTestDir dir("parallax_pair_list_test");
+  Database database(dir.path() / "database.db");
+  const camera_t camera_id =
+      database.WriteCamera(Camera::Create(1, CameraModelId::kPinhole, 100, 64, 48));
+  const image_t a = database.WriteImage("a.png", camera_id);
+  const image_t b = database.WriteImage("b.png", camera_id);
+  const image_t c = database.WriteImage("c.png", camera_id);
+  const fs::path list = dir.path() / "pairs.txt";
+  std::ofstream(list) << "# pairs\na.png b.png\r\n\nb.png c.png\nb.png a.png\nc.png c.png\n";
+  PairSelectionOptions options;
+  options.mode = PairMode::kList;
+  options.pair_list_path = list;
+  const PairSelection selection = SelectPairs(options, {a, b, c}, database);
+  EXPECT_EQ(selection.pairs, (std::vector<ImagePair>{{a, b}, {b, c}}));
+
+  std::ofstream(list) << "a.png b.png\na.png d.png\n";
+  try {
+    SelectPairs(options, {a, b, c}, database);
+    FAIL() << "an unknown name was accepted";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              list.string() + ":2: image 'd.png' is not in the database");
+  }
+  std::ofstream(list) << "a.png b.png c.png\n";
+  EXPECT_THROW(SelectPairs(options, {a, b, c}, database), InputError);
+  options.pair_list_path.clear();
+  EXPECT_THROW(SelectPairs(options, {a, b, c}, database), InputError);
 }
 
 TEST(PairSelection, SpatialPairsAreNearestWithinRadius) {
