@@ -1,13 +1,16 @@
 // parallax model convert|analyze|align|merge|adjust: tools for any COLMAP model.
 #include <iostream>
+#include <map>
 
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
 #include "parallax/estimators/bundle_adjustment.h"
+#include "parallax/geometry/gps.h"
 #include "parallax/report/evaluation.h"
 #include "parallax/report/ground_truth.h"
 #include "parallax/report/model_union.h"
 #include "parallax/scene/colmap_io.h"
+#include "parallax/scene/database.h"
 #include "parallax/scene/principal_plane.h"
 #include "parallax/util/check.h"
 
@@ -23,6 +26,34 @@ void WriteModelAs(const Reconstruction& model, const std::string& type,
   } else {
     WritePointsPly(model, output);
   }
+}
+
+// The camera centres the database's GPS priors give, in ECEF or in ENU metres about their mean
+// position, by image name.
+GroundTruth GpsGroundTruth(const std::filesystem::path& database_path, const std::string& frame) {
+  if (!std::filesystem::is_regular_file(database_path)) {
+    throw MissingFileError(database_path.string() + ": no such database");
+  }
+  const Database database(database_path);
+  const std::vector<std::pair<image_t, GeodeticPosition>> priors = database.ReadImageGpsPriors();
+  if (priors.size() < 3) {
+    throw InputError(database_path.string() + ": " + std::to_string(priors.size()) +
+                     " images have a GPS position; the alignment needs at least 3");
+  }
+  GeodeticPosition origin{0, 0, 0};
+  for (const auto& [image_id, position] : priors) {
+    origin.latitude += position.latitude / priors.size();
+    origin.longitude += position.longitude / priors.size();
+    origin.altitude += position.altitude / priors.size();
+  }
+  std::map<image_t, std::string> names;
+  for (const Image& image : database.ReadAllImages()) names[image.image_id] = image.name;
+  std::vector<std::pair<std::string, Eigen::Vector3d>> centers;
+  for (const auto& [image_id, position] : priors) {
+    centers.emplace_back(names.at(image_id), frame == "ecef" ? EcefFromGeodetic(position)
+                                                             : EnuFromGeodetic(position, origin));
+  }
+  return GroundTruthOfPositions(centers, database_path.string() + " (GPS, " + frame + ")");
 }
 
 }  // namespace
@@ -59,12 +90,31 @@ int RunModel(int argc, char** argv) {
       align->add_option("--reference", reference,
                         "Ground truth (*_par.txt, a folder of *.camera files) or a model folder; "
                         "images are matched by name");
+  std::string reference_positions, gps_database, gps_frame = "enu";
+  CLI::Option* positions_option =
+      align->add_option("--reference-positions", reference_positions,
+                        "Or camera centres: per line `image_name X Y Z` (COLMAP's model_aligner "
+                        "--alignment_type custom --ref_images_path)");
+  CLI::Option* gps_option =
+      align->add_option("--gps", gps_database,
+                        "Or the GPS positions the database holds (EXIF or COLMAP 4's pose "
+                        "priors), in metres: see --gps-frame (COLMAP's ecef and enu alignments)");
+  align
+      ->add_option("--gps-frame", gps_frame,
+                   "ecef (earth-centred metres) or enu (east, north, up metres about the mean "
+                   "position)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"ecef", "enu"}));
+  reference_option->excludes(positions_option)->excludes(gps_option);
+  positions_option->excludes(gps_option);
   bool plane = false, no_text = false;
   align
       ->add_flag("--plane", plane,
                  "Instead: the points' plane of largest spread onto z = 0, centroid at the "
                  "origin, cameras above (COLMAP's model_aligner --alignment_type plane)")
-      ->excludes(reference_option);
+      ->excludes(reference_option)
+      ->excludes(positions_option)
+      ->excludes(gps_option);
   align->add_flag("--no-text", no_text, "Write the binary model only");
   align->add_option("--output", output, "Folder of the aligned model (binary and text)")
       ->required();
@@ -177,16 +227,24 @@ int RunModel(int argc, char** argv) {
       std::cout << "model align: principal plane of " << model.NumPoints3D()
                 << " points onto z = 0 -> " << output << "\n";
     } else {
-      if (reference.empty()) throw InputError("model align: give --reference or --plane");
+      const GroundTruth truth =
+          !reference.empty()             ? ReadGroundTruth(reference)
+          : !reference_positions.empty() ? ReadPositionsGroundTruth(reference_positions)
+          : !gps_database.empty()        ? GpsGroundTruth(gps_database, gps_frame)
+                                         : throw InputError(
+                                               "model align: give --reference, --reference-positions, "
+                                                      "--gps or --plane");
       EvaluationMetrics metrics;
-      const Reconstruction aligned = AlignToReference(model, ReadGroundTruth(reference), &metrics);
+      const Reconstruction aligned = AlignToReference(model, truth, &metrics);
       WriteReconstructionBinary(aligned, output);
       if (!no_text) WriteReconstructionText(aligned, output);
       std::cout << "model align: scale " << metrics.gt_from_model.scale << ", "
                 << metrics.num_alignment_inliers << "/" << metrics.num_registered_in_gt
-                << " shared images agree; median centre error " << metrics.center_error.median
-                << ", rotation " << metrics.rotation_error_deg.median << " deg -> " << output
-                << "\n";
+                << " shared images agree; median centre error " << metrics.center_error.median;
+      // Positions carry no rotations to compare with.
+      if (!reference.empty())
+        std::cout << ", rotation " << metrics.rotation_error_deg.median << " deg";
+      std::cout << " -> " << output << "\n";
     }
     std::cout << std::flush;
     return 0;

@@ -230,6 +230,40 @@ GroundTruth GroundTruthOfModel(const Reconstruction& model, const std::string& s
   return truth;
 }
 
+GroundTruth GroundTruthOfPositions(
+    const std::vector<std::pair<std::string, Eigen::Vector3d>>& positions,
+    const std::string& source) {
+  GroundTruth truth;
+  truth.source = source;
+  for (const auto& [name, center] : positions) {
+    GroundTruthImage view;
+    view.name = name;
+    view.cam_from_world.translation = -center;  // Identity rotation: the centre is `center`.
+    truth.images.push_back(std::move(view));
+  }
+  return truth;
+}
+
+GroundTruth ReadPositionsGroundTruth(const std::filesystem::path& path) {
+  std::ifstream stream(path);
+  if (!stream) throw MissingFileError(path.string() + ": cannot open the reference positions");
+  std::vector<std::pair<std::string, Eigen::Vector3d>> positions;
+  std::string line;
+  for (int line_number = 1; std::getline(stream, line); ++line_number) {
+    std::istringstream fields(line);
+    std::string name, extra;
+    Eigen::Vector3d center;
+    if (!(fields >> name) || name[0] == '#') continue;
+    if (!(fields >> center.x() >> center.y() >> center.z()) || (fields >> extra) ||
+        !center.allFinite()) {
+      throw InputError(path.string() + ":" + std::to_string(line_number) +
+                       ": expected `image_name X Y Z`");
+    }
+    positions.emplace_back(name, center);
+  }
+  return GroundTruthOfPositions(positions, path.string());
+}
+
 GroundTruth ReadGroundTruth(const std::filesystem::path& path) {
   std::error_code error;
   if (std::filesystem::is_regular_file(path, error)) return ReadMiddleburyGroundTruth(path);

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "parallax/geometry/rigid3.h"
@@ -44,6 +45,15 @@ GroundTruth ReadStrechaGroundTruth(const std::filesystem::path& dir);
 GroundTruth ReadColmapGroundTruth(const std::filesystem::path& dir);
 // The registered images of a model in memory as a ground truth; `source` names it in messages.
 GroundTruth GroundTruthOfModel(const Reconstruction& model, const std::string& source);
+
+// Camera centres only (rotations identity), for aligning a model by its centres: a GPS
+// survey, COLMAP's model_aligner reference positions. `positions`: image name and centre.
+GroundTruth GroundTruthOfPositions(
+    const std::vector<std::pair<std::string, Eigen::Vector3d>>& positions,
+    const std::string& source);
+// COLMAP's model_aligner --ref_images_path file: per line `image_name X Y Z` ('#' comments).
+// Throws InputError "<file>:<line>: <reason>".
+GroundTruth ReadPositionsGroundTruth(const std::filesystem::path& path);
 
 // Detects the format: a file is Middlebury; a folder with *.camera files is Strecha; a
 // folder with cameras.bin or cameras.txt is COLMAP. Throws InputError otherwise.
