@@ -11,7 +11,10 @@
 
 #include "parallax/cli/colmap_flags.h"
 #include "parallax/cli/commands.h"
+#include "parallax/scene/colmap_io.h"
+#include "parallax/scene/database.h"
 #include "parallax/util/check.h"
+#include "parallax/util/file.h"
 
 namespace parallax::cli {
 
@@ -212,6 +215,35 @@ int RunColmapSpatialMatcher(int argc, char** argv) {
   });
 }
 
+int RunColmapMatchesImporter(int argc, char** argv) {
+  std::vector<ColmapOption> table = MatchingOptions();
+  table.push_back(Value({"match_list_path"}, "--pair-list"));
+  table.push_back(Custom({"match_type"}, [](const std::string& value, std::vector<std::string>*) {
+    if (value != "pairs") {
+      throw InputError("colmap matches_importer: --match_type " + value +
+                       " is not supported yet (pairs: Parallax matches and verifies the listed "
+                       "pairs)");
+    }
+  }));
+  table.push_back(Ignored({"FeatureMatching.skip_geometric_verification"},
+                          "is not used: every pair is verified"));
+  table.push_back(Ignored(
+      {"FeatureMatching.rig_verification", "FeatureMatching.skip_image_pairs_in_same_frame"},
+      "applies to rigs, which Parallax does not model yet"));
+  table.push_back(
+      Ignored({"FeatureMatching.type", "SiftMatching.max_distance",
+               "SiftMatching.cpu_brute_force_matcher", "SiftMatching.planar_scene",
+               "SiftMatching.multiple_models", "SiftMatching.compute_relative_pose",
+               "SiftMatching.min_inlier_ratio", "TwoViewGeometry.min_inlier_ratio",
+               "TwoViewGeometry.multiple_models", "TwoViewGeometry.compute_relative_pose",
+               "TwoViewGeometry.detect_watermark", "TwoViewGeometry.random_seed"},
+              "is decided by Parallax's matcher (docs/defaults.md)"));
+  return Translate("matches_importer", argc, argv, table, [](ColmapTranslation translation) {
+    translation.parallax_args.insert(translation.parallax_args.end(), {"--pairs", "list"});
+    return RunTranslated(RunMatch, "match", translation);
+  });
+}
+
 int RunColmapModelAnalyzer(int argc, char** argv) {
   const std::vector<ColmapOption> table = {
       Custom({"path"}, [](const std::string& value,
@@ -224,6 +256,70 @@ int RunColmapModelAnalyzer(int argc, char** argv) {
 }
 
 namespace {
+
+// The rest of COLMAP 3.8's and 4.2's Mapper options: accepted so that scripts tuned for
+// COLMAP run; Parallax's mapper decides these by its own criteria (docs/defaults.md).
+std::vector<std::string> OtherMapperOptions() {
+  std::vector<std::string> names;
+  for (const char* name : {"abs_pose_min_inlier_ratio",
+                           "ba_global_backend",
+                           "ba_global_frames_freq",
+                           "ba_global_ignore_redundant_points3D",
+                           "ba_global_ignore_redundant_points3D_min_coverage_gain",
+                           "ba_global_images_freq",
+                           "ba_global_max_refinement_change",
+                           "ba_global_max_refinements",
+                           "ba_global_pba_gpu_index",
+                           "ba_global_points_freq",
+                           "ba_global_use_pba",
+                           "ba_local_backend",
+                           "ba_local_max_refinement_change",
+                           "ba_local_max_refinements",
+                           "ba_local_min_tri_angle",
+                           "ba_local_num_images",
+                           "ba_min_num_residuals_for_cpu_multi_threading",
+                           "ba_min_num_residuals_for_multi_threading",
+                           "ba_refine_sensor_from_rig",
+                           "constant_camera_list_path",
+                           "constant_rig_list_path",
+                           "filter_min_tri_angle",
+                           "fix_existing_frames",
+                           "fix_existing_images",
+                           "ignore_watermarks",
+                           "image_list_path",
+                           "init_image_id1",
+                           "init_image_id2",
+                           "init_max_error",
+                           "init_max_forward_motion",
+                           "init_max_reg_trials",
+                           "init_num_trials",
+                           "local_ba_min_tri_angle",
+                           "max_extra_param",
+                           "max_focal_length_ratio",
+                           "max_model_overlap",
+                           "max_num_models",
+                           "max_reg_trials",
+                           "max_runtime_seconds",
+                           "min_focal_length_ratio",
+                           "min_model_size",
+                           "min_num_matches",
+                           "snapshot_frames_freq",
+                           "snapshot_images_freq",
+                           "snapshot_path",
+                           "structure_less_registration_fallback",
+                           "structure_less_registration_only",
+                           "tri_complete_max_reproj_error",
+                           "tri_continue_max_angle_error",
+                           "tri_create_max_angle_error",
+                           "tri_max_transitivity",
+                           "tri_merge_max_reproj_error",
+                           "tri_re_max_angle_error",
+                           "tri_re_max_trials",
+                           "tri_re_min_ratio"}) {
+    names.push_back(std::string("Mapper.") + name);
+  }
+  return names;
+}
 
 // COLMAP's mapper options, for mapper and hierarchical_mapper; `output_path` is kept aside:
 // both write <output_path>/<k>/ where Parallax writes OUT/sparse/<k>/.
@@ -241,7 +337,11 @@ std::vector<ColmapOption> MapperOptions(std::string* output_path) {
       Value({"Mapper.abs_pose_max_error"}, "--abs-pose-max-error"),
       Value({"Mapper.filter_max_reproj_error"}, "--filter-max-error"),
       Value({"Mapper.tri_min_angle"}, "--min-tri-angle"),
-      Value({"Mapper.ba_global_images_ratio"}, "--ba-global-images-ratio"),
+      Value({"Mapper.ba_global_frames_ratio", "Mapper.ba_global_images_ratio"},
+            "--ba-global-images-ratio"),
+      FlagIfOn({"Mapper.tri_ignore_two_view_tracks"}, "--tri-ignore-two-view-tracks"),
+      Value({"Mapper.tri_complete_max_transitivity"}, "--tri-complete-hops"),
+      Value({"Mapper.random_seed"}, "--seed"),
       Value({"Mapper.ba_global_points_ratio"}, "--ba-global-points-ratio"),
       FlagIfOff({"Mapper.multiple_models"}, "--no-multiple-models"),
       FlagIfOff({"Mapper.ba_refine_focal_length"}, "--no-refine-intrinsics"),
@@ -254,16 +354,19 @@ std::vector<ColmapOption> MapperOptions(std::string* output_path) {
               "is not used: Parallax's adjustments stop on their own criteria"),
       Ignored({"Mapper.ba_use_gpu", "Mapper.ba_gpu_index"}, kNoGpu),
       Ignored({"Mapper.extract_colors"}, "is always on"),
+      Ignored(OtherMapperOptions(), "is not used by Parallax's mapper (docs/colmap-dropin.md)"),
   };
 }
 
-// Runs `parallax mapper` into a folder beside `output_path`, then moves each model into place.
+// Where the mapper's models go: <output_path>/<k>/ (mapper, hierarchical_mapper) or the one
+// model's files straight into <output_path> (point_triangulator, image_registrator).
+enum class ModelLayout { kNumbered, kSingle };
+
+// Runs `parallax mapper` into a folder beside `output_path`, then moves the models into place.
 int RunMapperInto(const std::string& subcommand, const std::string& output_path,
-                  ColmapTranslation translation) {
+                  ColmapTranslation translation, ModelLayout layout = ModelLayout::kNumbered) {
   namespace fs = std::filesystem;
   if (output_path.empty()) throw InputError("colmap " + subcommand + ": --output_path is required");
-  // Parallax writes OUT/sparse/<k>; COLMAP writes <output_path>/<k>. Mapped beside, then
-  // each model moved into place.
   const fs::path output(output_path);
   const fs::path staging = output.parent_path() / ("." + output.filename().string() + ".parallax");
   fs::remove_all(staging);
@@ -272,14 +375,39 @@ int RunMapperInto(const std::string& subcommand, const std::string& output_path,
   const int code = RunTranslated(RunMapper, "mapper", translation);
   if (code == 0) {
     fs::create_directories(output);
-    for (const fs::directory_entry& model : fs::directory_iterator(staging / "sparse")) {
-      const fs::path target = output / model.path().filename();
+    // Parallax writes OUT/sparse/<k>/; each model (or model 0's files) is moved into place.
+    const fs::path models = staging / "sparse";
+    const fs::path source = layout == ModelLayout::kSingle ? models / "0" : models;
+    for (const fs::directory_entry& entry : fs::directory_iterator(source)) {
+      const fs::path target = output / entry.path().filename();
       fs::remove_all(target);
-      fs::rename(model.path(), target);
+      fs::rename(entry.path(), target);
     }
   }
   fs::remove_all(staging);
   return code;
+}
+
+// The value after `flag` in translated arguments; empty when absent.
+std::string TranslatedValue(const ColmapTranslation& translation, const std::string& flag) {
+  const auto& args = translation.parallax_args;
+  const auto it = std::find(args.begin(), args.end(), flag);
+  return it != args.end() && it + 1 != args.end() ? *(it + 1) : "";
+}
+
+// COLMAP's mapper leaves project.ini in each model folder, for its GUI to open the model with
+// its database and images: the paths of the run (Parallax's mapper options are not COLMAP's).
+void WriteProjectIni(const std::filesystem::path& output, const ColmapTranslation& translation) {
+  const std::string ini = "database_path=" + TranslatedValue(translation, "--database") +
+                          "\nimage_path=" + TranslatedValue(translation, "--image-path") +
+                          "\ninput_path=" + TranslatedValue(translation, "--input-model") +
+                          "\noutput_path=" + output.string() + "\n";
+  for (const std::filesystem::directory_entry& model :
+       std::filesystem::directory_iterator(output)) {
+    if (model.is_directory() && HasColmapModel(model.path())) {
+      WriteTextFileAtomically(model.path() / "project.ini", ini);
+    }
+  }
 }
 
 }  // namespace
@@ -288,22 +416,187 @@ int RunColmapMapper(int argc, char** argv) {
   std::string output_path;
   return Translate("mapper", argc, argv, MapperOptions(&output_path),
                    [&output_path](const ColmapTranslation& translation) {
-                     return RunMapperInto("mapper", output_path, translation);
+                     const int code = RunMapperInto("mapper", output_path, translation);
+                     if (code == 0) WriteProjectIni(output_path, translation);
+                     return code;
                    });
 }
 
 int RunColmapHierarchicalMapper(int argc, char** argv) {
   std::string output_path;
   std::vector<ColmapOption> table = MapperOptions(&output_path);
-  table.push_back(Value({"leaf_max_num_images"}, "--cluster-max-images"));
-  table.push_back(Value({"image_overlap"}, "--cluster-overlap"));
-  table.push_back(Ignored({"num_workers"}, "is set by --Mapper.num_threads and the cores"));
+  // 3.x names them bare, 4.x under HierarchicalMapper.
+  table.push_back(Value({"HierarchicalMapper.leaf_max_num_images", "leaf_max_num_images"},
+                        "--cluster-max-images"));
+  table.push_back(
+      Value({"HierarchicalMapper.image_overlap", "image_overlap"}, "--cluster-overlap"));
+  table.push_back(
+      Ignored({"HierarchicalMapper.num_workers", "num_workers", "HierarchicalMapper.num_threads"},
+              "is set by --Mapper.num_threads and the cores"));
+  table.push_back(
+      Ignored({"HierarchicalMapper.init_num_trials", "HierarchicalMapper.is_hierarchical",
+               "HierarchicalMapper.branching", "HierarchicalMapper.num_image_matches"},
+              "is not used by Parallax's partition (docs/pair-selection.md)"));
   return Translate("hierarchical_mapper", argc, argv, table,
                    [&output_path](ColmapTranslation translation) {
                      translation.parallax_args.insert(translation.parallax_args.end(),
                                                       {"--mapper", "hierarchical"});
                      return RunMapperInto("hierarchical_mapper", output_path, translation);
                    });
+}
+
+int RunColmapPointTriangulator(int argc, char** argv) {
+  std::string output_path;
+  std::vector<ColmapOption> table = MapperOptions(&output_path);
+  table.push_back(Custom({"clear_points"}, [](const std::string& value, std::vector<std::string>*) {
+    if (!ParseColmapBool("clear_points", value)) {
+      std::cerr << "colmap: warning: --clear_points 0: Parallax triangulates every point anew "
+                   "from the database\n";
+    }
+  }));
+  table.push_back(Ignored({"refine_intrinsics"},
+                          "is not used: the intrinsics stay as given (run bundle_adjuster)"));
+  return Translate(
+      "point_triangulator", argc, argv, table, [&output_path](ColmapTranslation translation) {
+        translation.parallax_args.push_back("--fixed-poses");
+        return RunMapperInto("point_triangulator", output_path, translation, ModelLayout::kSingle);
+      });
+}
+
+int RunColmapImageRegistrator(int argc, char** argv) {
+  std::string output_path;
+  return Translate("image_registrator", argc, argv, MapperOptions(&output_path),
+                   [&output_path](const ColmapTranslation& translation) {
+                     return RunMapperInto("image_registrator", output_path, translation,
+                                          ModelLayout::kSingle);
+                   });
+}
+
+int RunColmapBundleAdjuster(int argc, char** argv) {
+  // COLMAP's booleans, passed on as Parallax's 0/1 option values.
+  const auto boolean = [](std::string colmap_name, std::string parallax_flag) {
+    return Custom(
+        {"BundleAdjustment." + colmap_name},
+        [colmap_name, parallax_flag](const std::string& value, std::vector<std::string>* args) {
+          args->push_back(parallax_flag);
+          args->push_back(ParseColmapBool(colmap_name, value) ? "1" : "0");
+        });
+  };
+  const std::vector<ColmapOption> table = {
+      Value({"input_path"}, "--input"),
+      Value({"output_path"}, "--output"),
+      boolean("refine_focal_length", "--refine-focal-length"),
+      boolean("refine_principal_point", "--refine-principal-point"),
+      boolean("refine_extra_params", "--refine-extra-params"),
+      // 3.x refine_extrinsics, 4.x refine_rig_from_world: off holds every pose.
+      FlagIfOff({"BundleAdjustment.refine_rig_from_world", "BundleAdjustment.refine_extrinsics"},
+                "--fix-poses"),
+      Value({"BundleAdjustmentCeres.max_num_iterations", "BundleAdjustment.max_num_iterations"},
+            "--max-iterations"),
+      Ignored({"BundleAdjustmentCeres.max_linear_solver_iterations",
+               "BundleAdjustment.max_linear_solver_iterations",
+               "BundleAdjustmentCeres.function_tolerance", "BundleAdjustment.function_tolerance",
+               "BundleAdjustmentCeres.gradient_tolerance", "BundleAdjustment.gradient_tolerance",
+               "BundleAdjustmentCeres.parameter_tolerance", "BundleAdjustment.parameter_tolerance",
+               "BundleAdjustmentCeres.min_num_residuals_for_cpu_multi_threading",
+               "BundleAdjustmentCeres.max_num_images_direct_dense_cpu_solver",
+               "BundleAdjustmentCeres.max_num_images_direct_sparse_cpu_solver",
+               "BundleAdjustment.backend"},
+              "is decided by Parallax's solver (docs/defaults.md)"),
+      Ignored({"BundleAdjustmentCeres.use_gpu", "BundleAdjustmentCeres.gpu_index",
+               "BundleAdjustmentCeres.min_num_images_gpu_solver",
+               "BundleAdjustmentCeres.max_num_images_direct_dense_gpu_solver",
+               "BundleAdjustmentCeres.max_num_images_direct_sparse_gpu_solver"},
+              kNoGpu),
+      Ignored({"BundleAdjustment.refine_sensor_from_rig",
+               "BundleAdjustment.constant_rig_from_world_rotation"},
+              "applies to rigs, which Parallax does not model yet"),
+      Ignored({"BundleAdjustment.refine_points3D", "BundleAdjustment.min_track_length"},
+              "is not used: every point is adjusted"),
+  };
+  return Translate("bundle_adjuster", argc, argv, table, [](ColmapTranslation translation) {
+    translation.parallax_args.insert(translation.parallax_args.begin(), "adjust");
+    translation.parallax_args.push_back("--no-text");  // COLMAP writes the binary model.
+    return RunTranslated(RunModel, "model", translation);
+  });
+}
+
+int RunColmapModelMerger(int argc, char** argv) {
+  // COLMAP merges the second model into the first's frame.
+  const std::vector<ColmapOption> table = {
+      Value({"input_path1"}, "--into"),
+      Value({"input_path2"}, "--input"),
+      Value({"output_path"}, "--output"),
+      Ignored({"max_reproj_error"}, "is not used: shared points are not fused"),
+  };
+  return Translate("model_merger", argc, argv, table, [](ColmapTranslation translation) {
+    translation.parallax_args.insert(translation.parallax_args.begin(), "merge");
+    translation.parallax_args.push_back("--no-text");
+    return RunTranslated(RunModel, "model", translation);
+  });
+}
+
+int RunColmapDatabaseCreator(int argc, char** argv) {
+  std::string database_path;
+  const std::vector<ColmapOption> table = {
+      Custom({"database_path"},
+             [&database_path](const std::string& value, std::vector<std::string>*) {
+               database_path = value;
+             }),
+  };
+  return Translate("database_creator", argc, argv, table,
+                   [&database_path](const ColmapTranslation& translation) {
+                     for (const std::string& warning : translation.warnings) {
+                       std::cerr << "colmap: warning: " << warning << std::endl;
+                     }
+                     if (database_path.empty()) {
+                       throw InputError("colmap database_creator: --database_path is required");
+                     }
+                     const Database database(database_path);  // Creates the schema.
+                     std::cout << "database_creator: " << database_path << "\n";
+                     return 0;
+                   });
+}
+
+int RunColmapAutomaticReconstructor(int argc, char** argv) {
+  const std::vector<ColmapOption> table = {
+      Value({"workspace_path"}, "--output"),
+      Value({"image_path"}, "--images"),
+      Value({"camera_model"}, "--camera-model"),
+      FlagIfOn({"single_camera"}, "--single-camera"),
+      Custom({"camera_params"},
+             [](const std::string& value, std::vector<std::string>* args) {
+               if (value.empty()) return;
+               args->push_back("--camera-params");
+               args->push_back(value);
+             }),
+      Value({"num_threads"}, "--threads"),
+      Value({"random_seed"}, "--seed"),
+      Custom({"sparse"},
+             [](const std::string& value, std::vector<std::string>*) {
+               if (!ParseColmapBool("sparse", value)) {
+                 throw InputError(
+                     "colmap automatic_reconstructor: --sparse 0 leaves nothing to "
+                     "do (Parallax has no dense stage)");
+               }
+             }),
+      Ignored({"dense", "mesher"},
+              "is not run: Parallax reconstructs the sparse model (run image_undistorter, then "
+              "a dense tool)"),
+      Ignored({"use_gpu", "gpu_index"}, kNoGpu),
+      Ignored({"data_type", "quality"},
+              "is not used: Parallax picks the pairs by the number of images"),
+      Ignored({"vocab_tree_path"}, "is COLMAP's tree format: Parallax trains its own"),
+      Ignored({"mask_path"}, "is not supported yet (masks)"),
+      Ignored({"image_list_path", "single_camera_per_folder", "extraction", "matching", "feature",
+               "mapper", "Mapper.ba_backend"},
+              "is not used by Parallax's reconstruct"),
+  };
+  return Translate("automatic_reconstructor", argc, argv, table, [](ColmapTranslation translation) {
+    // COLMAP's workspace: database.db and sparse/<k>/, as reconstruct writes.
+    translation.parallax_args.push_back("--no-text");
+    return RunTranslated(RunReconstruct, "reconstruct", translation);
+  });
 }
 
 int RunColmapImageUndistorter(int argc, char** argv) {
@@ -328,29 +621,52 @@ int RunColmapImageUndistorter(int argc, char** argv) {
 }
 
 int RunColmapModelAligner(int argc, char** argv) {
+  std::string alignment_type, database_path, ref_images_path;
+  const auto keep = [](std::string* kept) {
+    return [kept](const std::string& value, std::vector<std::string>*) { *kept = value; };
+  };
   const std::vector<ColmapOption> table = {
       Value({"input_path"}, "--input"),
       Value({"output_path"}, "--output"),
-      Custom({"alignment_type"},
-             [](const std::string& value, std::vector<std::string>* args) {
-               if (value != "plane") {
-                 throw InputError("colmap model_aligner: --alignment_type " + value +
-                                  " is not supported yet (plane)");
+      Custom({"alignment_type"}, keep(&alignment_type)),
+      Custom({"database_path"}, keep(&database_path)),
+      Custom({"ref_images_path"}, keep(&ref_images_path)),
+      Custom({"ref_is_gps"},
+             [](const std::string& value, std::vector<std::string>*) {
+               if (ParseColmapBool("ref_is_gps", value)) {
+                 throw InputError(
+                     "colmap model_aligner: --ref_is_gps 1 is not supported: give "
+                     "the GPS in the database and --alignment_type ecef or enu");
                }
-               args->push_back("--plane");
              }),
-      Ignored({"database_path"}, "is not needed by the plane alignment"),
       Ignored({"alignment_max_error", "min_common_images", "robust_alignment",
-               "robust_alignment_max_error", "estimate_scale"},
-              "applies to alignment to reference positions, not to the plane"),
+               "robust_alignment_max_error", "estimate_scale", "transform_path"},
+              "is not used: the alignment's RANSAC takes inliers within 5 % of the reference's "
+              "spread (docs/defaults.md)"),
   };
-  return Translate("model_aligner", argc, argv, table, [](ColmapTranslation translation) {
-    const auto& args = translation.parallax_args;
-    if (std::find(args.begin(), args.end(), "--plane") == args.end()) {
-      throw InputError("colmap model_aligner: --alignment_type is required (plane)");
+  return Translate("model_aligner", argc, argv, table, [&](ColmapTranslation translation) {
+    auto& args = translation.parallax_args;
+    if (alignment_type == "plane") {
+      args.push_back("--plane");
+    } else if (alignment_type == "ecef" || alignment_type == "enu") {
+      if (database_path.empty()) {
+        throw InputError("colmap model_aligner: --alignment_type " + alignment_type +
+                         " needs --database_path (its images' GPS positions)");
+      }
+      args.insert(args.end(), {"--gps", database_path, "--gps-frame", alignment_type});
+    } else if (alignment_type == "custom" || (alignment_type.empty() && !ref_images_path.empty())) {
+      if (ref_images_path.empty()) {
+        throw InputError("colmap model_aligner: --alignment_type custom needs --ref_images_path");
+      }
+      args.insert(args.end(), {"--reference-positions", ref_images_path});
+    } else {
+      throw InputError("colmap model_aligner: --alignment_type " +
+                       (alignment_type.empty() ? std::string("is required")
+                                               : alignment_type + " is not supported") +
+                       " (plane, ecef, enu or custom)");
     }
-    translation.parallax_args.insert(translation.parallax_args.begin(), "align");
-    translation.parallax_args.push_back("--no-text");  // COLMAP writes the binary model.
+    args.insert(args.begin(), "align");
+    args.push_back("--no-text");  // COLMAP writes the binary model.
     return RunTranslated(RunModel, "model", translation);
   });
 }

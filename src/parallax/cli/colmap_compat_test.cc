@@ -4,13 +4,19 @@
 // COLMAP's file layout.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "parallax/cli/cli_test_process.h"
 #include "parallax/cli/colmap_flags.h"
+#include "parallax/geometry/gps.h"
+#include "parallax/render/synthetic_scene.h"
+#include "parallax/report/ground_truth.h"
 #include "parallax/scene/colmap_io.h"
 #include "parallax/util/check.h"
 #include "parallax/util/test_dir.h"
@@ -210,6 +216,206 @@ TEST_F(ColmapDropInTest, VocabTreeMatchingHierarchicalMappingAndTheModelTools) {
                    (source / "text").string(), "--output_type", "TXT"});
   ASSERT_TRUE(result.ExitedWith(0)) << result.err;
   EXPECT_TRUE(fs::exists(source / "text" / "images.txt"));
+}
+
+// instant-ngp's colmap2nerf.py: its extraction options (SIFT variants Parallax warns about),
+// guided matching, the mapper, then bundle_adjuster freeing the principal point, and text.
+TEST_F(ColmapDropInTest, InstantNgpsColmap2NerfSequence) {
+  const fs::path source = RenderSource(16);
+  const std::string db = (source / "colmap.db").string();
+  const std::string input = (source / "input").string();
+  const fs::path sparse = source / "colmap_sparse";
+  test::ProcessResult result =
+      Colmap({"feature_extractor", "--ImageReader.camera_model", "OPENCV",
+              "--ImageReader.camera_params", "", "--SiftExtraction.estimate_affine_shape=true",
+              "--SiftExtraction.domain_size_pooling=true", "--ImageReader.single_camera", "1",
+              "--database_path", db, "--image_path", input});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_NE(result.err.find("--SiftExtraction.estimate_affine_shape is a SIFT variant"),
+            std::string::npos);
+  result =
+      Colmap({"exhaustive_matcher", "--SiftMatching.guided_matching=true", "--database_path", db});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  fs::create_directories(sparse);
+  result = Colmap(
+      {"mapper", "--database_path", db, "--image_path", input, "--output_path", sparse.string()});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  const Reconstruction mapped = ReadReconstruction(sparse / "0");
+  result = Colmap({"bundle_adjuster", "--input_path", (sparse / "0").string(), "--output_path",
+                   (sparse / "0").string(), "--BundleAdjustment.refine_principal_point", "1"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  const Reconstruction adjusted = ReadReconstruction(sparse / "0");
+  EXPECT_EQ(adjusted.NumRegImages(), 16u);
+  EXPECT_EQ(adjusted.NumPoints3D(), mapped.NumPoints3D());
+  // The principal point was freed, and stays near the rendered one (the image centre): along
+  // one sequence it is weakly observed, so within 2.5 % of the width.
+  const Camera& before = mapped.Cameras().begin()->second;
+  const Camera& after = adjusted.Cameras().begin()->second;
+  EXPECT_NE(after.params[2], before.params[2]);
+  EXPECT_NEAR(after.params[2], 320.0, 16.0);
+  EXPECT_NEAR(after.params[3], 240.0, 16.0);
+  result = Colmap({"model_converter", "--input_path", (sparse / "0").string(), "--output_path",
+                   (source / "colmap_text").string(), "--output_type", "TXT"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_EQ(ReadReconstruction(source / "colmap_text").NumRegImages(), 16u);
+}
+
+// A workspace from automatic_reconstructor, then the tools that start from poses: images
+// registered into a model that lacks them, points triangulated into fixed poses, and two
+// models merged.
+TEST_F(ColmapDropInTest, AutomaticReconstructionAndTheToolsThatStartFromPoses) {
+  const fs::path source = RenderSource(16);
+  const fs::path workspace = source / "workspace";
+  test::ProcessResult result =
+      Colmap({"automatic_reconstructor", "--workspace_path", workspace.string(), "--image_path",
+              (source / "input").string(), "--single_camera", "1", "--dense", "1"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_NE(result.err.find("--dense is not run"), std::string::npos) << result.err;
+  const std::string db = (workspace / "database.db").string();
+  const Reconstruction full = ReadReconstruction(workspace / "sparse" / "0");
+  ASSERT_EQ(full.NumRegImages(), 16u);
+
+  // Three images taken out: image_registrator puts them back, the others stay where they were.
+  Reconstruction partial = full;
+  const std::vector<image_t> ids = full.RegImageIds();
+  for (const image_t image_id : {ids[3], ids[8], ids[12]}) partial.DeRegisterImage(image_id);
+  WriteReconstructionBinary(partial, source / "partial");
+  result =
+      Colmap({"image_registrator", "--database_path", db, "--input_path",
+              (source / "partial").string(), "--output_path", (source / "registered").string()});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  const Reconstruction registered = ReadReconstruction(source / "registered");
+  EXPECT_EQ(registered.NumRegImages(), 16u);
+
+  // point_triangulator: the same poses to the bit, points from the database.
+  result = Colmap({"point_triangulator", "--database_path", db, "--image_path",
+                   (source / "input").string(), "--input_path", (source / "partial").string(),
+                   "--output_path", (source / "triangulated").string(), "--clear_points", "1"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  const Reconstruction triangulated = ReadReconstruction(source / "triangulated");
+  EXPECT_EQ(triangulated.NumRegImages(), 13u);
+  EXPECT_GT(triangulated.NumPoints3D(), full.NumPoints3D() / 2);
+  for (const image_t image_id : partial.RegImageIds()) {
+    const Rigid3d& given = partial.GetImage(image_id).cam_from_world;
+    const Rigid3d& kept = triangulated.GetImage(image_id).cam_from_world;
+    EXPECT_EQ(kept.translation, given.translation) << image_id;
+    EXPECT_EQ(kept.rotation.coeffs(), given.rotation.coeffs()) << image_id;
+  }
+
+  // model_merger: the full model joins the partial one's frame; all 16 images.
+  result = Colmap({"model_merger", "--input_path1", (source / "partial").string(), "--input_path2",
+                   (workspace / "sparse" / "0").string(), "--output_path",
+                   (source / "merged").string()});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_EQ(ReadReconstruction(source / "merged").NumRegImages(), 16u);
+  EXPECT_FALSE(fs::exists(source / "merged" / "images.txt"));
+
+  // database_creator: an empty database that feature_extractor then fills.
+  const std::string fresh = (source / "fresh.db").string();
+  ASSERT_TRUE(Colmap({"database_creator", "--database_path", fresh}).ExitedWith(0));
+  EXPECT_TRUE(fs::exists(fresh));
+  result = Colmap(
+      {"feature_extractor", "--database_path", fresh, "--image_path", (source / "input").string()});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+
+  // matches_importer: only the listed pairs are matched and verified.
+  std::vector<std::string> names;
+  for (const image_t image_id : ids) names.push_back(full.GetImage(image_id).name);
+  std::sort(names.begin(), names.end());
+  const fs::path list = source / "pairs.txt";
+  {
+    std::ofstream stream(list);
+    for (size_t i = 0; i + 1 < names.size(); ++i) stream << names[i] << " " << names[i + 1] << "\n";
+  }
+  result = Colmap({"matches_importer", "--database_path", fresh, "--match_list_path", list.string(),
+                   "--match_type", "pairs", "--SiftMatching.use_gpu", "0"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_NE(result.out.find("match: 15 pairs"), std::string::npos) << result.out;
+  result = Colmap({"matches_importer", "--database_path", fresh, "--match_list_path", list.string(),
+                   "--match_type", "raw"});
+  EXPECT_TRUE(result.ExitedWith(1));
+  EXPECT_NE(result.err.find("--match_type raw is not supported yet"), std::string::npos);
+}
+
+// model_aligner on a GPS-tagged drone survey: ENU metres about the mean position, ECEF
+// metres, and custom reference positions; each puts the cameras where the truth has them.
+TEST_F(ColmapDropInTest, ModelAlignerPutsASurveyInMetres) {
+  const fs::path source = dir_.path() / "survey";
+  ASSERT_TRUE(test::RunParallax(
+                  {"synth", "--output", (source / "input").string(), "--views", "16", "--layout",
+                   "aerial", "--width", "480", "--height", "360", "--gps-noise", "1", "-q"},
+                  dir_.path(), 300)
+                  .ExitedWith(0));
+  const GroundTruth truth = ReadMiddleburyGroundTruth(source / "input" / "synth_par.txt");
+  std::map<std::string, Eigen::Vector3d> truth_centers;
+  Eigen::Vector3d truth_mean = Eigen::Vector3d::Zero();
+  for (const GroundTruthImage& view : truth.images) {
+    truth_centers[view.name] = view.cam_from_world.Inverse().translation;
+    truth_mean += truth_centers[view.name] / static_cast<double>(truth.images.size());
+  }
+  const fs::path workspace = source / "workspace";
+  ASSERT_TRUE(Colmap({"automatic_reconstructor", "--workspace_path", workspace.string(),
+                      "--image_path", (source / "input").string()})
+                  .ExitedWith(0));
+  const std::string model = (workspace / "sparse" / "0").string();
+  const std::string db = (workspace / "database.db").string();
+  // The largest distance from `expected` over the model's cameras.
+  const auto max_center_error = [](const fs::path& aligned_path, const auto& expected) {
+    const Reconstruction aligned = ReadReconstruction(aligned_path);
+    EXPECT_EQ(aligned.NumRegImages(), 16u) << aligned_path;
+    double worst = 0;
+    for (const image_t image_id : aligned.RegImageIds()) {
+      const Image& image = aligned.GetImage(image_id);
+      worst = std::max(worst, (image.ProjectionCenter() - expected(image.name)).norm());
+    }
+    return worst;
+  };
+
+  // ENU: east, north, up metres about the mean GPS position (1 m of GPS noise per view).
+  test::ProcessResult result =
+      Colmap({"model_aligner", "--input_path", model, "--output_path", (source / "enu").string(),
+              "--alignment_type", "enu", "--database_path", db, "--alignment_max_error", "3"});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_LT(max_center_error(source / "enu",
+                             [&](const std::string& name) {
+                               return Eigen::Vector3d(truth_centers.at(name) - truth_mean);
+                             }),
+            3.0);
+  // ECEF: the same cameras, earth-centred.
+  result = Colmap({"model_aligner", "--input_path", model, "--output_path",
+                   (source / "ecef").string(), "--alignment_type", "ecef", "--database_path", db});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  const GeodeticPosition origin = SyntheticSurveyOrigin();
+  EXPECT_LT(
+      max_center_error(source / "ecef",
+                       [&](const std::string& name) {
+                         return EcefFromGeodetic(GeodeticFromEnu(truth_centers.at(name), origin));
+                       }),
+      3.0);
+  // Custom: exact reference positions, 1 km away.
+  const fs::path reference = source / "reference.txt";
+  {
+    std::ofstream stream(reference);
+    stream << std::setprecision(17) << "# image_name X Y Z\n";
+    for (const auto& [name, center] : truth_centers) {
+      stream << name << " " << center.x() + 1000 << " " << center.y() << " " << center.z() << "\n";
+    }
+  }
+  result =
+      Colmap({"model_aligner", "--input_path", model, "--output_path", (source / "custom").string(),
+              "--alignment_type", "custom", "--ref_images_path", reference.string()});
+  ASSERT_TRUE(result.ExitedWith(0)) << result.err;
+  EXPECT_LT(max_center_error(source / "custom",
+                             [&](const std::string& name) {
+                               return Eigen::Vector3d(truth_centers.at(name) +
+                                                      Eigen::Vector3d(1000, 0, 0));
+                             }),
+            0.5);
+  // Without the database, ENU fails in one line.
+  result = Colmap({"model_aligner", "--input_path", model, "--output_path", (source / "x").string(),
+                   "--alignment_type", "enu"});
+  EXPECT_TRUE(result.ExitedWith(1));
+  EXPECT_NE(result.err.find("needs --database_path"), std::string::npos) << result.err;
 }
 
 TEST_F(ColmapDropInTest, BadOptionsAndCommandsFailInOneLine) {

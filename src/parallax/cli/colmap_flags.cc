@@ -11,8 +11,10 @@ namespace {
 
 // Options of COLMAP's option manager that every subcommand accepts.
 const std::vector<std::string>& CommonIgnoredOptions() {
-  static const std::vector<std::string> names = {"project_path", "log_to_stderr", "log_level",
-                                                 "default_random_seed", "random_seed"};
+  static const std::vector<std::string> names = {
+      "project_path", "log_to_stderr", "log_level", "default_random_seed",
+      "random_seed",  "log_target",    "log_path",  "log_severity",
+      "log_color"};
   return names;
 }
 

@@ -20,12 +20,19 @@ constexpr Command kCommands[] = {
     {"sequential_matcher", parallax::cli::RunColmapSequentialMatcher},
     {"vocab_tree_matcher", parallax::cli::RunColmapVocabTreeMatcher},
     {"spatial_matcher", parallax::cli::RunColmapSpatialMatcher},
+    {"matches_importer", parallax::cli::RunColmapMatchesImporter},
     {"mapper", parallax::cli::RunColmapMapper},
     {"hierarchical_mapper", parallax::cli::RunColmapHierarchicalMapper},
     {"image_undistorter", parallax::cli::RunColmapImageUndistorter},
     {"model_aligner", parallax::cli::RunColmapModelAligner},
     {"model_analyzer", parallax::cli::RunColmapModelAnalyzer},
     {"model_converter", parallax::cli::RunColmapModelConverter},
+    {"model_merger", parallax::cli::RunColmapModelMerger},
+    {"point_triangulator", parallax::cli::RunColmapPointTriangulator},
+    {"image_registrator", parallax::cli::RunColmapImageRegistrator},
+    {"bundle_adjuster", parallax::cli::RunColmapBundleAdjuster},
+    {"database_creator", parallax::cli::RunColmapDatabaseCreator},
+    {"automatic_reconstructor", parallax::cli::RunColmapAutomaticReconstructor},
 };
 
 void PrintUsage() {

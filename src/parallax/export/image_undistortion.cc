@@ -86,6 +86,39 @@ void WriteStereoConfig(const Reconstruction& model, const fs::path& stereo_dir) 
   WriteTextFileAtomically(stereo_dir / "fusion.cfg", fusion);
 }
 
+// COLMAP's two scripts beside the workspace: its dense steps with geometric or photometric
+// consistency, then its meshers, each a command of its own.
+void WriteDenseScripts(const fs::path& workspace) {
+  for (const bool geometric : {true, false}) {
+    const std::string script =
+        std::string(
+            "# Dense reconstruction of this workspace with COLMAP: set $COLMAP_EXE_PATH\n"
+            "# to the folder of the colmap executable.\n"
+            "$COLMAP_EXE_PATH/colmap patch_match_stereo \\\n"
+            "  --workspace_path \".\" \\\n"
+            "  --workspace_format COLMAP \\\n"
+            "  --PatchMatchStereo.max_image_size 2000 \\\n"
+            "  --PatchMatchStereo.geom_consistency ") +
+        (geometric ? "true" : "false") +
+        "\n$COLMAP_EXE_PATH/colmap stereo_fusion \\\n"
+        "  --workspace_path \".\" \\\n"
+        "  --workspace_format COLMAP \\\n"
+        "  --input_type " +
+        (geometric ? "geometric" : "photometric") +
+        " \\\n"
+        "  --output_path \"./fused.ply\"\n"
+        "$COLMAP_EXE_PATH/colmap poisson_mesher \\\n"
+        "  --input_path \"./fused.ply\" \\\n"
+        "  --output_path \"./meshed-poisson.ply\"\n"
+        "$COLMAP_EXE_PATH/colmap delaunay_mesher \\\n"
+        "  --input_path \"./\" \\\n"
+        "  --input_type dense \\\n"
+        "  --output_path \"./meshed-delaunay.ply\"\n";
+    WriteTextFileAtomically(
+        workspace / (geometric ? "run-colmap-geometric.sh" : "run-colmap-photometric.sh"), script);
+  }
+}
+
 }  // namespace
 
 void UndistortionOptions::Check() const {
@@ -235,6 +268,7 @@ UndistortionResult WriteUndistortedWorkspace(const Reconstruction& model, const 
   });
   progress.Finish();
   WriteStereoConfig(undistorted, output_dir / "stereo");
+  WriteDenseScripts(output_dir);
   WriteReconstructionBinary(undistorted, output_dir / "sparse");
   UndistortionResult result;
   result.num_images = image_ids.size();
