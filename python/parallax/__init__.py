@@ -54,6 +54,28 @@ from ._parallax import (  # noqa: F401
     write_report,
 )
 
+# pycolmap's names and habits (docs/colmap-dropin.md): `import parallax as pycolmap`.
+from ._pycolmap import (  # noqa: F401,E402
+    Database,
+    Rotation3d,
+    absolute_pose_estimation,
+    essential_matrix_estimation,
+    estimate_absolute_pose,
+    estimate_essential_matrix,
+    estimate_fundamental_matrix,
+    estimate_homography_matrix,
+    extract_features,
+    fundamental_matrix_estimation,
+    homography_matrix_estimation,
+    incremental_mapping,
+    match_exhaustive,
+    match_sequential,
+    match_spatial,
+    match_vocabtree,
+    triangulate_points,
+    undistort_images,
+)
+
 __version__ = "0.1.0"
 
 

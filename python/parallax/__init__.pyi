@@ -11,14 +11,23 @@ FloatArray = npt.NDArray[np.float64]
 
 __version__: str
 
+class Rotation3d(np.ndarray):
+    # A 3 x 3 rotation matrix with pycolmap's calls; quat is x, y, z, w (pycolmap's order).
+    quat: FloatArray
+    def __new__(cls, value: Optional[FloatArray] = ...) -> Rotation3d: ...
+    def matrix(self) -> FloatArray: ...
+    def inverse(self) -> Rotation3d: ...
+
 class Rigid3d:
-    rotation: FloatArray
+    rotation: Rotation3d
     quaternion: FloatArray
     translation: FloatArray
     def __init__(self, rotation: FloatArray = ..., translation: FloatArray = ...) -> None: ...
     def matrix(self) -> FloatArray: ...
     def inverse(self) -> Rigid3d: ...
     def __mul__(self, other: Union[Rigid3d, FloatArray]) -> Any: ...
+    # Itself: pycolmap 3.12's image.cam_from_world() and earlier image.cam_from_world both work.
+    def __call__(self) -> Rigid3d: ...
 
 class Camera:
     camera_id: int
@@ -30,6 +39,7 @@ class Camera:
     K: FloatArray
     focal_length: float
     principal_point: FloatArray
+    def calibration_matrix(self) -> FloatArray: ...
     def __init__(self, model: str, width: int, height: int, params: Sequence[float]) -> None: ...
     def img_from_cam(self, points: FloatArray) -> FloatArray: ...
     def cam_from_img(self, pixels: FloatArray) -> FloatArray: ...
@@ -104,6 +114,7 @@ class Reconstruction:
     def write_binary(self, path: PathLike) -> None: ...
     def write_text(self, path: PathLike) -> None: ...
     def export_ply(self, path: PathLike) -> None: ...
+    def export_PLY(self, path: PathLike) -> None: ...
     def num_cameras(self) -> int: ...
     def num_images(self) -> int: ...
     def num_reg_images(self) -> int: ...
@@ -131,6 +142,10 @@ class EstimationResult:
     R: Optional[FloatArray]  # dlt_resection
     t: Optional[FloatArray]  # dlt_resection
     def __bool__(self) -> bool: ...
+    # pycolmap's keys: "E", "F", "H" or "cam_from_world" (the model), "num_inliers",
+    # "inlier_mask", "cam2_from_cam1".
+    def __getitem__(self, key: str) -> Any: ...
+    def keys(self) -> list[str]: ...
 
 class ExtractionResult:
     num_images_found: int
@@ -166,18 +181,68 @@ def estimate_fundamental_matrix(points1: FloatArray, points2: FloatArray, *, max
 def estimate_homography(points1: FloatArray, points2: FloatArray, *, max_error: float = ...,
                         confidence: float = ..., max_num_trials: int = ...,
                         seed: int = ...) -> EstimationResult: ...
-def estimate_essential_matrix(points1: FloatArray, points2: FloatArray, K1: FloatArray,
-                              K2: Optional[FloatArray] = ..., *, max_error: float = ...,
+def estimate_homography_matrix(points1: FloatArray, points2: FloatArray,
+                               estimation_options: Any = ..., **kwargs: Any) -> EstimationResult: ...
+# K1, K2: intrinsic matrices, or pycolmap's cameras (points undistorted by their models).
+def estimate_essential_matrix(points1: FloatArray, points2: FloatArray,
+                              K1: Union[FloatArray, Camera],
+                              K2: Optional[Union[FloatArray, Camera]] = ...,
+                              estimation_options: Any = ..., *, max_error: float = ...,
                               confidence: float = ..., max_num_trials: int = ...,
                               seed: int = ...) -> EstimationResult: ...
-def estimate_absolute_pose(points2D: FloatArray, points3D: FloatArray, camera: Camera, *,
+def estimate_absolute_pose(points2D: FloatArray, points3D: FloatArray, camera: Camera,
+                           estimation_options: Any = ..., *,
                            max_error: float = ..., confidence: float = ...,
                            max_num_trials: int = ..., seed: int = ...) -> EstimationResult: ...
+
+# pycolmap 0.x's names of the four above.
+absolute_pose_estimation: Callable[..., EstimationResult]
+essential_matrix_estimation: Callable[..., EstimationResult]
+fundamental_matrix_estimation: Callable[..., EstimationResult]
+homography_matrix_estimation: Callable[..., EstimationResult]
+
+# pycolmap's pipeline names (docs/colmap-dropin.md).
+def undistort_images(output_path: PathLike, input_path: Union[Reconstruction, PathLike],
+                     image_path: PathLike, **options: Any) -> int: ...
+def match_exhaustive(database_path: PathLike, **options: Any) -> MatchResult: ...
+def match_sequential(database_path: PathLike, **options: Any) -> MatchResult: ...
+def match_spatial(database_path: PathLike, **options: Any) -> MatchResult: ...
+def match_vocabtree(database_path: PathLike, **options: Any) -> MatchResult: ...
+def incremental_mapping(database_path: PathLike, image_path: PathLike, output_path: PathLike,
+                        options: Optional[dict[str, Any]] = ...,
+                        input_path: Optional[PathLike] = ...,
+                        **kwargs: Any) -> dict[int, Reconstruction]: ...
+
+class Database:
+    # A COLMAP database read through sqlite3 (read-only), pycolmap's way.
+    num_images: int
+    num_cameras: int
+    num_keypoints: int
+    num_matches: int
+    num_verified_image_pairs: int
+    def __init__(self, path: Optional[PathLike] = ...) -> None: ...
+    @classmethod
+    def open(cls, path: PathLike) -> Database: ...
+    def close(self) -> None: ...
+    def __enter__(self) -> Database: ...
+    def __exit__(self, *exc: Any) -> None: ...
+    def exists_image(self, image_id: int) -> bool: ...
+    def read_all_images(self) -> list[dict[str, Any]]: ...
+    def read_keypoints(self, image_id: int) -> FloatArray: ...
+    def read_descriptors(self, image_id: int) -> npt.NDArray[np.uint8]: ...
+    def read_two_view_geometry_inliers(self, image_id1: int,
+                                       image_id2: int) -> npt.NDArray[np.uint32]: ...
 def dlt_resection(points2D: FloatArray, points3D: FloatArray, *, max_error: float = ...,
                   confidence: float = ..., max_num_trials: int = ...,
                   seed: int = ...) -> EstimationResult: ...
+@overload
 def triangulate_points(proj_matrix1: FloatArray, proj_matrix2: FloatArray, points1: FloatArray,
                        points2: FloatArray) -> FloatArray: ...
+# pycolmap's: the database's points into the model's fixed poses, written to output_path.
+@overload
+def triangulate_points(reconstruction: Reconstruction, database_path: PathLike,
+                       image_path: PathLike, output_path: PathLike,
+                       **options: Any) -> Reconstruction: ...
 def extract_sift(image: npt.NDArray[Any], *, sift: str = ..., max_features: int = ...,
                  max_image_size: int = ..., max_upsampled_size: int = ..., sift_contrast: float = ...,
                  sift_edge: float = ..., root_sift: bool = ...
@@ -227,6 +292,7 @@ def extract_features(image_dir: PathLike, database: PathLike, *, threads: int = 
 
 def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: Progress = ...,
         pairs: Union[str, os.PathLike] = ...,
+        pair_list: Union[str, os.PathLike] = ...,
         auto_exhaustive_max_images: int = ...,
         overlap: int = ...,
         vocab_tree: Union[str, os.PathLike] = ...,
@@ -257,6 +323,7 @@ def match(database: PathLike, *, threads: int = ..., seed: int = ..., progress: 
 
 def map(database: PathLike, image_dir: PathLike, output_dir: PathLike, *, seed: int = ..., progress: Progress = ...,
         input_model: Union[str, os.PathLike] = ...,
+        fixed_poses: bool = ...,
         init_min_inliers: int = ...,
         init_min_tri_angle: float = ...,
         init_min_inliers_floor: int = ...,
@@ -308,6 +375,7 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         sift: Union[str, os.PathLike] = ...,
         sift_max_orientations: int = ...,
         pairs: Union[str, os.PathLike] = ...,
+        pair_list: Union[str, os.PathLike] = ...,
         auto_exhaustive_max_images: int = ...,
         overlap: int = ...,
         vocab_tree: Union[str, os.PathLike] = ...,
@@ -335,6 +403,7 @@ def reconstruct(image_dir: PathLike, output_dir: PathLike, *, database: Optional
         ransac_sampler: Union[str, os.PathLike] = ...,
         match_batch_size: int = ...,
         input_model: Union[str, os.PathLike] = ...,
+        fixed_poses: bool = ...,
         init_min_inliers: int = ...,
         init_min_tri_angle: float = ...,
         init_min_inliers_floor: int = ...,
