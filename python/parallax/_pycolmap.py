@@ -380,19 +380,22 @@ class Database:
             "SELECT image_id, name, camera_id FROM images ORDER BY image_id")
         return [{"image_id": i, "name": n, "camera_id": c} for i, n, c in rows]
 
+    def _blob(self, table, image_id):
+        """(rows, cols, bytes) of an image's row in `table`; None when it has none."""
+        row = self._connection.execute(
+            f"SELECT rows, cols, data FROM {table} WHERE image_id = ?", (image_id,)).fetchone()
+        return None if row is None or row[0] == 0 else row
+
     def read_keypoints(self, image_id):
         """N x 2 pixel positions (COLMAP stores 2, 4 or 6 columns; the first two are x, y)."""
-        row = self._connection.execute(
-            "SELECT rows, cols, data FROM keypoints WHERE image_id = ?", (image_id,)).fetchone()
-        if row is None or row[0] == 0:
+        row = self._blob("keypoints", image_id)
+        if row is None:
             return np.zeros((0, 2))
-        data = np.frombuffer(row[2], dtype=np.float32).reshape(row[0], row[1])
-        return data[:, :2].astype(float)
+        return np.frombuffer(row[2], dtype=np.float32).reshape(row[0], row[1])[:, :2].astype(float)
 
     def read_descriptors(self, image_id):
-        row = self._connection.execute(
-            "SELECT rows, cols, data FROM descriptors WHERE image_id = ?", (image_id,)).fetchone()
-        if row is None or row[0] == 0:
+        row = self._blob("descriptors", image_id)
+        if row is None:
             return np.zeros((0, 128), dtype=np.uint8)
         return np.frombuffer(row[2], dtype=np.uint8).reshape(row[0], row[1])
 
