@@ -38,6 +38,11 @@ ColmapOption Custom(std::vector<std::string> names,
                     std::function<void(const std::string&, std::vector<std::string>*)> apply) {
   return {std::move(names), Kind::kCustom, "", "", std::move(apply)};
 }
+// An option the drop-in itself uses (not passed on): its value is kept in `*kept`.
+ColmapOption Kept(std::vector<std::string> names, std::string* kept) {
+  return Custom(std::move(names),
+                [kept](const std::string& value, std::vector<std::string>*) { *kept = value; });
+}
 
 // An option under its 4.x section and its 3.x one (COLMAP 4 moved the options that are not
 // SIFT's own from SiftExtraction/SiftMatching to FeatureExtraction/FeatureMatching).
@@ -51,12 +56,17 @@ std::vector<std::string> Matching(const std::string& option) {
 const char* kNoGpu = "has no meaning for Parallax (no GPU is used)";
 const char* kNotImplemented = "is a SIFT variant Parallax does not implement";
 
-// Runs a Parallax subcommand on translated arguments, after the warnings.
-int RunTranslated(int (*run)(int, char**), const std::string& parallax_command,
-                  const ColmapTranslation& translation) {
+// The translation's warnings, one line each.
+void PrintWarnings(const ColmapTranslation& translation) {
   for (const std::string& warning : translation.warnings) {
     std::cerr << "colmap: warning: " << warning << std::endl;
   }
+}
+
+// Runs a Parallax subcommand on translated arguments, after the warnings.
+int RunTranslated(int (*run)(int, char**), const std::string& parallax_command,
+                  const ColmapTranslation& translation) {
+  PrintWarnings(translation);
   std::vector<std::string> args = {parallax_command};
   args.insert(args.end(), translation.parallax_args.begin(), translation.parallax_args.end());
   std::vector<char*> argv;
@@ -327,8 +337,7 @@ std::vector<ColmapOption> MapperOptions(std::string* output_path) {
   return {
       Value({"database_path"}, "--database"),
       Value({"image_path"}, "--image-path"),
-      Custom({"output_path"}, [output_path](const std::string& value,
-                                            std::vector<std::string>*) { *output_path = value; }),
+      Kept({"output_path"}, output_path),
       Value({"input_path"}, "--input-model"),
       Value({"Mapper.num_threads"}, "--ba-threads"),
       Value({"Mapper.init_min_num_inliers"}, "--init-min-inliers"),
@@ -539,16 +548,11 @@ int RunColmapModelMerger(int argc, char** argv) {
 int RunColmapDatabaseCreator(int argc, char** argv) {
   std::string database_path;
   const std::vector<ColmapOption> table = {
-      Custom({"database_path"},
-             [&database_path](const std::string& value, std::vector<std::string>*) {
-               database_path = value;
-             }),
+      Kept({"database_path"}, &database_path),
   };
   return Translate("database_creator", argc, argv, table,
                    [&database_path](const ColmapTranslation& translation) {
-                     for (const std::string& warning : translation.warnings) {
-                       std::cerr << "colmap: warning: " << warning << std::endl;
-                     }
+                     PrintWarnings(translation);
                      if (database_path.empty()) {
                        throw InputError("colmap database_creator: --database_path is required");
                      }
@@ -622,15 +626,12 @@ int RunColmapImageUndistorter(int argc, char** argv) {
 
 int RunColmapModelAligner(int argc, char** argv) {
   std::string alignment_type, database_path, ref_images_path;
-  const auto keep = [](std::string* kept) {
-    return [kept](const std::string& value, std::vector<std::string>*) { *kept = value; };
-  };
   const std::vector<ColmapOption> table = {
       Value({"input_path"}, "--input"),
       Value({"output_path"}, "--output"),
-      Custom({"alignment_type"}, keep(&alignment_type)),
-      Custom({"database_path"}, keep(&database_path)),
-      Custom({"ref_images_path"}, keep(&ref_images_path)),
+      Kept({"alignment_type"}, &alignment_type),
+      Kept({"database_path"}, &database_path),
+      Kept({"ref_images_path"}, &ref_images_path),
       Custom({"ref_is_gps"},
              [](const std::string& value, std::vector<std::string>*) {
                if (ParseColmapBool("ref_is_gps", value)) {
