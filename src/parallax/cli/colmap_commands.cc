@@ -640,10 +640,10 @@ int RunColmapModelAligner(int argc, char** argv) {
                      "the GPS in the database and --alignment_type ecef or enu");
                }
              }),
-      Ignored({"alignment_max_error", "min_common_images", "robust_alignment",
-               "robust_alignment_max_error", "estimate_scale", "transform_path"},
-              "is not used: the alignment's RANSAC takes inliers within 5 % of the reference's "
-              "spread (docs/defaults.md)"),
+      Value({"alignment_max_error", "robust_alignment_max_error"}, "--max-error"),
+      Ignored({"min_common_images", "robust_alignment", "estimate_scale", "transform_path"},
+              "is not used: the alignment is always a robust similarity (RANSAC, then a "
+              "least-squares refit on its inliers) over all shared images"),
   };
   return Translate("model_aligner", argc, argv, table, [&](ColmapTranslation translation) {
     auto& args = translation.parallax_args;

@@ -371,10 +371,12 @@ TEST_F(ColmapDropInTest, ModelAlignerPutsASurveyInMetres) {
     return worst;
   };
 
-  // ENU: east, north, up metres about the mean GPS position (1 m of GPS noise per view).
+  // ENU: east, north, up metres about the mean GPS position. The GPS has 1 m of noise per
+  // axis: 5 m takes in all honest positions (3.4 sigma holds 99 % of a 3-axis normal), where
+  // the 5 % of the survey's spread that reference alignments use would take 6 of the 16.
   test::ProcessResult result =
       Colmap({"model_aligner", "--input_path", model, "--output_path", (source / "enu").string(),
-              "--alignment_type", "enu", "--database_path", db, "--alignment_max_error", "3"});
+              "--alignment_type", "enu", "--database_path", db, "--alignment_max_error", "5"});
   ASSERT_TRUE(result.ExitedWith(0)) << result.err;
   EXPECT_LT(max_center_error(source / "enu",
                              [&](const std::string& name) {
@@ -382,8 +384,9 @@ TEST_F(ColmapDropInTest, ModelAlignerPutsASurveyInMetres) {
                              }),
             3.0);
   // ECEF: the same cameras, earth-centred.
-  result = Colmap({"model_aligner", "--input_path", model, "--output_path",
-                   (source / "ecef").string(), "--alignment_type", "ecef", "--database_path", db});
+  result =
+      Colmap({"model_aligner", "--input_path", model, "--output_path", (source / "ecef").string(),
+              "--alignment_type", "ecef", "--database_path", db, "--alignment_max_error", "5"});
   ASSERT_TRUE(result.ExitedWith(0)) << result.err;
   const GeodeticPosition origin = SyntheticSurveyOrigin();
   EXPECT_LT(

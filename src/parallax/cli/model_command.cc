@@ -105,6 +105,13 @@ int RunModel(int argc, char** argv) {
                    "position)")
       ->capture_default_str()
       ->check(CLI::IsMember({"ecef", "enu"}));
+  EvaluationOptions alignment;
+  align
+      ->add_option("--max-error", alignment.alignment_max_error,
+                   "Inlier distance of the alignment, in the reference's units (metres for "
+                   "--gps); 0: 5 % of the reference's spread (COLMAP's --alignment_max_error)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   reference_option->excludes(positions_option)->excludes(gps_option);
   positions_option->excludes(gps_option);
   bool plane = false, no_text = false;
@@ -235,7 +242,7 @@ int RunModel(int argc, char** argv) {
                                                "model align: give --reference, --reference-positions, "
                                                       "--gps or --plane");
       EvaluationMetrics metrics;
-      const Reconstruction aligned = AlignToReference(model, truth, &metrics);
+      const Reconstruction aligned = AlignToReference(model, truth, &metrics, alignment);
       WriteReconstructionBinary(aligned, output);
       if (!no_text) WriteReconstructionText(aligned, output);
       std::cout << "model align: scale " << metrics.gt_from_model.scale << ", "

@@ -105,6 +105,7 @@ nlohmann::json CurveToJson(const std::vector<AccuracyAtThreshold>& curve) {
 
 void EvaluationOptions::Check() const {
   PARALLAX_CHECK_GT(alignment_max_error_ratio, 0.0);
+  PARALLAX_CHECK_GE(alignment_max_error, 0.0);
   alignment_ransac.Check();
   for (double threshold : rotation_thresholds_deg) PARALLAX_CHECK_GT(threshold, 0.0);
   for (double threshold : center_thresholds_ratio) PARALLAX_CHECK_GT(threshold, 0.0);
@@ -182,7 +183,9 @@ EvaluationMetrics EvaluateReconstruction(const Reconstruction& model, const Grou
   // A similarity needs three centres; with coincident GT centres there is no scale to use.
   if (matched_gt_indices.size() >= 3 && metrics.gt_scene_scale > 0) {
     RansacOptions ransac_options = options.alignment_ransac;
-    ransac_options.max_error = options.alignment_max_error_ratio * metrics.gt_scene_scale;
+    ransac_options.max_error = options.alignment_max_error > 0
+                                   ? options.alignment_max_error
+                                   : options.alignment_max_error_ratio * metrics.gt_scene_scale;
     const Sim3dRansacReport report = EstimateSim3dRansac(model_centers, gt_centers, ransac_options);
     metrics.alignment_success = report.success;
     if (report.success) {
@@ -355,8 +358,8 @@ nlohmann::json ModelStatisticsToJson(const Reconstruction& model) {
 }
 
 Reconstruction AlignToReference(const Reconstruction& model, const GroundTruth& reference,
-                                EvaluationMetrics* metrics) {
-  const EvaluationMetrics evaluation = EvaluateReconstruction(model, reference);
+                                EvaluationMetrics* metrics, const EvaluationOptions& options) {
+  const EvaluationMetrics evaluation = EvaluateReconstruction(model, reference, options);
   if (!evaluation.alignment_success) {
     throw InputError(reference.source + ": no similarity aligns the model to it (" +
                      std::to_string(evaluation.num_registered_in_gt) +

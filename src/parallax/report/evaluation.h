@@ -16,7 +16,10 @@ struct EvaluationOptions {
   // Inlier distance of the similarity alignment of camera centres, as a fraction of the GT
   // scene scale (mean distance of the GT centres from their centroid).
   double alignment_max_error_ratio = 0.05;
-  // The alignment's RANSAC (its max_error is set from the ratio above).
+  // When positive, the inlier distance in the reference's units instead (metres for GPS:
+  // the ratio would reject honest GPS noise on a survey whose spread is small beside it).
+  double alignment_max_error = 0;
+  // The alignment's RANSAC (its max_error is set from the two above).
   RansacOptions alignment_ransac = Sim3dRansacOptions(1.0);
   // Thresholds (degrees) of the rotation accuracy curve.
   std::vector<double> rotation_thresholds_deg = {1.0, 2.0, 5.0};
@@ -111,7 +114,8 @@ nlohmann::json ModelStatisticsToJson(const Reconstruction& model);
 // centres (`parallax model align`). Throws InputError naming the reference when none could be
 // fitted. `metrics`, when not null, gets that evaluation.
 Reconstruction AlignToReference(const Reconstruction& model, const GroundTruth& reference,
-                                EvaluationMetrics* metrics = nullptr);
+                                EvaluationMetrics* metrics = nullptr,
+                                const EvaluationOptions& options = {});
 // A readable multi-line table for the terminal.
 std::string MetricsToText(const EvaluationMetrics& metrics);
 

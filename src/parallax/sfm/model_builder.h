@@ -36,6 +36,9 @@ class ModelBuilder {
   ModelBuilder(const IncrementalMapperOptions& options, const MapperInput& input,
                const std::set<image_t>& used_images, MapperSummary* summary,
                ProgressReporter* progress);
+  // The builder keeps a reference to `used_images`: a temporary set would dangle.
+  ModelBuilder(const IncrementalMapperOptions&, const MapperInput&, std::set<image_t>&&,
+               MapperSummary*, ProgressReporter*) = delete;
 
   Reconstruction& Model() { return reconstruction_; }
   const Reconstruction& Model() const { return reconstruction_; }

@@ -1,5 +1,7 @@
 #include "parallax/sfm/point_triangulator.h"
 
+#include <set>
+
 #include "parallax/estimators/bundle_adjustment.h"
 #include "parallax/sfm/model_builder.h"
 #include "parallax/util/check.h"
@@ -12,7 +14,8 @@ Reconstruction TriangulateIntoPoses(const IncrementalMapperOptions& options,
                                     const MapperInput& input, const Reconstruction& posed,
                                     MapperSummary* summary) {
   ProgressReporter progress("triangulating", posed.NumRegImages());
-  ModelBuilder builder(options, input, /*used_images=*/{}, summary, &progress);
+  const std::set<image_t> no_used_images;
+  ModelBuilder builder(options, input, no_used_images, summary, &progress);
   if (!builder.InitializeFromModel(posed)) {
     throw InputError(
         "point triangulation needs at least two posed images that the database "
