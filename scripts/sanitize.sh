@@ -60,6 +60,9 @@ heavy='TempleRingTest\.|TempleRingFirstViews|TempleRingFigures|FramesTheTempleRi
 heavy+='|CheckerboardDataset|SyntheticTempleThirtyViews|PhotosAddedLater|ResumeTest|DeterminismTest'
 heavy+='|SameResultWhicheverThreadMapsACluster|DistributedTest\.|HardScenesTest\.'
 heavy+='|ColmapDropInTest\.(GaussianSplattings|VocabTreeMatching)'
+# The retrieval suite renders and describes 24 views in each test's process: about 190 s of
+# CPU per test here. Its bad-tree test stays (an error path); the normal job runs the others.
+heavy+='|AerialPairSelectionTest\.(RetrievalFinds|AutoChooses)'
 heavy+='|UserFaultsTest\.(ReplacedPhoto|TouchedPhoto|RemovedPhoto|SecondRunOnTheSame)'
 # The weak scene's two models (TwoModelsOfOneRun...) form or not by clang's summation order:
 # under this build the relaxed-bars-off run already makes one model, so nothing is joined.
