@@ -85,6 +85,16 @@ TEST(ColmapFlags, AnUnknownOptionFailsNamingIt) {
   }
   EXPECT_THROW(TranslateColmapArgs("m", {"--database_path"}, kTable), InputError);  // No value.
   EXPECT_THROW(TranslateColmapArgs("m", {"stray"}, kTable), InputError);
+  // One option under both its names fails naming both, before the Parallax command sees it.
+  try {
+    TranslateColmapArgs(
+        "m", {"--SiftExtraction.num_threads", "2", "--FeatureExtraction.num_threads", "4"}, kTable);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "colmap m: --SiftExtraction.num_threads and --FeatureExtraction.num_threads set "
+              "the same option; give it once");
+  }
   // COLMAP's options common to every subcommand are accepted with a warning.
   const ColmapTranslation common = TranslateColmapArgs("m", {"--log_to_stderr", "1"}, kTable);
   EXPECT_TRUE(common.parallax_args.empty());

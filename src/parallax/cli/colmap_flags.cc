@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <map>
 
 #include "parallax/util/check.h"
 
@@ -33,6 +34,9 @@ ColmapTranslation TranslateColmapArgs(const std::string& subcommand,
                                       const std::vector<std::string>& args,
                                       const std::vector<ColmapOption>& table) {
   ColmapTranslation translation;
+  // The name each value option was given under: one given twice, or under both its 3.x and
+  // 4.x names, is refused here (as COLMAP refuses it) rather than by the Parallax command.
+  std::map<const ColmapOption*, std::string> value_given_as;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     if (arg == "-h" || arg == "--help") {
@@ -71,6 +75,10 @@ ColmapTranslation TranslateColmapArgs(const std::string& subcommand,
     }
     switch (option->kind) {
       case ColmapOption::Kind::kValue:
+        if (const auto [given, first] = value_given_as.emplace(&*option, name); !first) {
+          throw InputError("colmap " + subcommand + ": --" + given->second + " and --" + name +
+                           " set the same option; give it once");
+        }
         translation.parallax_args.push_back(option->parallax_flag);
         translation.parallax_args.push_back(value);
         break;
