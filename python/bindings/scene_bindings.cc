@@ -163,8 +163,13 @@ void BindCamera(py::module_& m) {
            }),
            py::arg("model"), py::arg("width"), py::arg("height"), py::arg("params"))
       .def_readwrite("camera_id", &Camera::camera_id)
-      .def_property_readonly("model", &Camera::ModelName,
-                             "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV.")
+      .def_property_readonly(
+          "model", &Camera::ModelName,
+          "COLMAP's model name: SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, "
+          "OPENCV_FISHEYE, FULL_OPENCV, FOV, SIMPLE_RADIAL_FISHEYE, "
+          "RADIAL_FISHEYE, THIN_PRISM_FISHEYE, RAD_TAN_THIN_PRISM_FISHEYE, "
+          "SIMPLE_DIVISION, DIVISION, SIMPLE_FISHEYE, FISHEYE, EUCM or "
+          "EQUIRECTANGULAR.")
       .def_readwrite("width", &Camera::width)
       .def_readwrite("height", &Camera::height)
       .def_property(

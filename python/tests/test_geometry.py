@@ -146,7 +146,7 @@ def test_too_few_points_fail_without_a_model():
     (lambda: parallax.estimate_fundamental_matrix(np.zeros((10, 2)), np.zeros((10, 2)),
                                                   max_error=0),
      "max_error: must be positive"),
-    (lambda: parallax.Camera("FISHEYE", 640, 480, [1, 2, 3]), "unknown camera model 'FISHEYE'"),
+    (lambda: parallax.Camera("FISHEYE_42", 640, 480, [1, 2, 3]), "unknown camera model 'FISHEYE_42'"),
     (lambda: parallax.Camera("PINHOLE", 640, 480, [1, 2, 3]), "PINHOLE takes 4 parameters"),
     (lambda: parallax.extract_sift(np.zeros((8, 8), np.uint8)), "at least 16 x 16"),
     (lambda: parallax.extract_sift(np.zeros((32, 32), np.uint8), sift="vlfeat"),

@@ -159,7 +159,8 @@ TEST_F(BadInputFilesTest, ModelWithDanglingIds) {
        ":2:", "duplicate 3D point id 1"},
       {"images.txt", images + images, ":7:", "duplicate image id 1"},
       {"cameras.txt", "1 PINHOLE 64 48 -57 57 32 24\n", ":1:", "invalid parameters for camera 1"},
-      {"cameras.txt", "1 FISHEYE 64 48 57 57 32 24\n", ":1:", "unknown camera model 'FISHEYE'"},
+      {"cameras.txt", "1 FISHEYE_42 64 48 57 57 32 24\n",
+       ":1:", "unknown camera model 'FISHEYE_42'"},
       {"cameras.txt", "1 PINHOLE 64 48 57 57 32\n", ":1:", "PINHOLE takes 4 parameters, got 3"},
       {"images.txt", Replace(images, "10.5 20.5 1", "10.5 20.5"), ":2:", "triplets"},
   };

@@ -9,9 +9,13 @@
 namespace parallax::cli {
 
 void AddExtractionOptions(CLI::App& app, ExtractionStageOptions* options) {
+  std::string model_names;
+  for (const CameraModelId id : kCameraModelIds) {
+    model_names += (model_names.empty() ? "" : ", ") + CameraModelName(id);
+  }
   app.add_option("--camera-model", options->camera.camera_model,
-                 "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV (default: "
-                 "SIMPLE_RADIAL, or PINHOLE with known intrinsics)");
+                 "COLMAP's camera model: " + model_names +
+                     " (default: SIMPLE_RADIAL, or PINHOLE with known intrinsics)");
   auto* params_option = app.add_option_function<std::string>(
       "--camera-params",
       [options](const std::string& text) {

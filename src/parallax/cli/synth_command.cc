@@ -2,7 +2,9 @@
 
 #include "parallax/cli/cli_common.h"
 #include "parallax/cli/commands.h"
+#include "parallax/pipeline/camera_setup.h"
 #include "parallax/render/synthetic_scene.h"
+#include "parallax/util/check.h"
 #include "parallax/util/timer.h"
 
 namespace parallax::cli {
@@ -52,6 +54,19 @@ int RunSynth(int argc, char** argv) {
   app.add_option("--focal", options.focal_length, "Focal length in pixels (0: 0.9 * width)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  std::string camera_model = "PINHOLE", camera_params;
+  app.add_option("--camera", camera_model,
+                 "The lens, any COLMAP camera model (OPENCV_FISHEYE, EQUIRECTANGULAR, ...), "
+                 "rendered ray per pixel through the model")
+      ->capture_default_str();
+  app.add_option("--camera-params", camera_params,
+                 "The lens's parameters in COLMAP's order, comma-separated (default: the "
+                 "focal length, the image centre, no distortion)");
+  app.add_option("--fov", options.field_of_view,
+                 "Field of view across the width in degrees, instead of --focal (a fisheye's "
+                 "may exceed 180)")
+      ->check(CLI::PositiveNumber)
+      ->excludes("--focal");
   app.add_option("--seed", options.seed, "Seed of textures, poses, lighting and noise")
       ->capture_default_str();
   app.add_option("--noise", options.noise_stddev, "Pixel noise standard deviation in grey levels")
@@ -76,14 +91,23 @@ int RunSynth(int argc, char** argv) {
   AddVerbosityFlags(app, &flags);
   return RunCommand(app, argc, argv, flags, [&] {
     options.layout = SyntheticSceneLayoutFromName(layout);
+    options.camera_model = CameraModelIdFromName(camera_model);
+    if (options.camera_model == CameraModelId::kInvalid) {
+      throw InputError("--camera: unknown camera model '" + camera_model + "'");
+    }
+    if (!camera_params.empty()) options.camera_params = ParseCameraParams(camera_params);
     if (!image_size.empty()) ParseDimensions(image_size, &options.width, &options.height);
     options.antialiasing = AntialiasingFromName(antialiasing);
     options.shadows = !no_shadows;
     const Timer timer;
     const Reconstruction views = GenerateSyntheticScene(options, output_dir);
     std::cout << "synth: " << views.NumImages() << " views (" << layout << ", " << options.width
-              << "x" << options.height << ", f = " << options.EffectiveFocalLength() << " px) in "
-              << output_dir << "; cameras in " << options.name << "_par.txt, K.txt, gt/; "
+              << "x" << options.height << ", " << views.GetCamera(1).ModelName()
+              << ", f = " << options.EffectiveFocalLength() << " px) in " << output_dir
+              << "; cameras in "
+              << (views.GetCamera(1).model_id == CameraModelId::kPinhole
+                      ? options.name + "_par.txt, K.txt, gt/; "
+                      : std::string("gt/; "))
               << timer.ElapsedSeconds() << " s" << std::endl;
     return 0;
   });

@@ -40,7 +40,7 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 using ProjectFn = void (*)(const double*, const Eigen::Vector3d&, Eigen::Vector2d*, Matrix23*,
                            double*);
-using ImgFromCamFn = void (*)(const double*, double, double, double, double*, double*);
+using ImgFromCamFn = bool (*)(const double*, double, double, double, double*, double*);
 
 // 0.5 rho(s) of one observation's squared residual s, and in *scale (when non-null) the
 // factor sqrt(rho'(s)) that Ceres' corrector applies to residual and Jacobian for losses with

@@ -94,8 +94,11 @@ CameraModelId SelectedCameraModel(const CameraSetupOptions& options, bool intrin
   }
   const CameraModelId model_id = CameraModelIdFromName(options.camera_model);
   if (model_id == CameraModelId::kInvalid) {
-    throw InputError("--camera-model: unknown camera model '" + options.camera_model +
-                     "' (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV)");
+    std::string known;
+    for (const CameraModelId id : kCameraModelIds)
+      known += (known.empty() ? "" : ", ") + CameraModelName(id);
+    throw InputError("--camera-model: unknown camera model '" + options.camera_model + "' (" +
+                     known + ")");
   }
   return model_id;
 }

@@ -56,19 +56,25 @@ cv::Mat RenderView(const SceneModel& scene, const Camera& camera, const Rigid3d&
   const int width = static_cast<int>(camera.width), height = static_cast<int>(camera.height);
   const bool pinhole = camera.model_id == CameraModelId::kSimplePinhole ||
                        camera.model_id == CameraModelId::kPinhole;
-  const double fx = camera.FocalLengthX(), fy = camera.FocalLengthY();
-  const double cx = camera.PrincipalPointX(), cy = camera.PrincipalPointY();
+  const double fx = pinhole ? camera.FocalLengthX() : 0.0,
+               fy = pinhole ? camera.FocalLengthY() : 0.0;
+  const double cx = pinhole ? camera.PrincipalPointX() : 0.0;
+  const double cy = pinhole ? camera.PrincipalPointY() : 0.0;
+  const bool perspective = camera.Projection() == CameraProjection::kPerspective;
   const Eigen::Matrix3d world_from_cam = cam_from_world.rotation.toRotationMatrix().transpose();
   const Eigen::Vector3d origin = ProjectionCenter(cam_from_world);
-  // Angle between neighbouring rays: textures average out detail finer than that.
-  const double pixel_angle = 1.0 / std::sqrt(fx * fy);
+  // Angle between neighbouring rays near the optical axis: textures average out detail
+  // finer than that.
+  const double pixel_angle = camera.CamFromImgThreshold(1.0);
   const double sample_angle =
       options.antialiasing == Antialiasing::kQuincunx
           ? pixel_angle / std::sqrt(2.0)
           : (options.antialiasing == Antialiasing::kGrid3x3 ? pixel_angle / 3.0 : pixel_angle);
   const auto ray_in_cam = [&](double x, double y) -> Eigen::Vector3d {
     if (pinhole) return Eigen::Vector3d((x - cx) / fx, (y - cy) / fy, 1.0);
-    return camera.CamFromImg(Eigen::Vector2d(x, y)).homogeneous();
+    // Every other lens through its own unprojection: fisheye rays beyond 90 degrees from
+    // the axis and the whole sphere included.
+    return camera.CamRayFromImg(Eigen::Vector2d(x, y));
   };
   const auto sample = [&](double x, double y) -> Eigen::Vector3f {
     return Trace(scene, origin, (world_from_cam * ray_in_cam(x, y)).normalized(), sample_angle,
@@ -114,10 +120,13 @@ cv::Mat RenderView(const SceneModel& scene, const Camera& camera, const Rigid3d&
       if (depth_row != nullptr) {
         const Eigen::Vector3d ray = ray_in_cam(col + 0.5, row + 0.5);
         const Eigen::Vector3d direction = world_from_cam * ray;
+        // z in the camera frame for a perspective lens; the distance along the ray for
+        // the others, whose rays reach behind the image plane.
+        const double along_z = perspective ? ray.z() : 1.0;
         SurfaceHit hit;
         depth_row[col] = scene.Intersect(origin, direction.normalized(),
                                          std::numeric_limits<double>::infinity(), &hit)
-                             ? static_cast<float>(hit.distance / direction.norm())
+                             ? static_cast<float>(hit.distance * along_z / direction.norm())
                              : 0.0f;
       }
     }

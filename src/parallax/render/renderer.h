@@ -46,9 +46,11 @@ struct RenderOptions {
 // (CV_8UC3, camera.width x camera.height), Lambert-shaded. Pixel (col, row) covers
 // [col, col + 1) x [row, row + 1) in the camera's image coordinates (COLMAP's convention:
 // the first pixel's centre is (0.5, 0.5)), so keypoints in the image are directly in the
-// camera's coordinates. Distorting models are rendered through Camera::CamFromImg (slower).
-// When `depth` is not null it gets, per pixel (CV_32FC1), the depth (z in the camera frame)
-// of the surface at the pixel's centre, 0 where the ray reaches the sky.
+// camera's coordinates. Every other model is rendered through Camera::CamRayFromImg
+// (slower), fisheyes beyond 180 degrees and the full sphere included.
+// When `depth` is not null it gets, per pixel (CV_32FC1), the depth of the surface at the
+// pixel's centre (z in the camera frame for a perspective model, the distance along the
+// ray for fisheye and spherical ones), 0 where the ray reaches the sky.
 cv::Mat RenderView(const SceneModel& scene, const Camera& camera, const Rigid3d& cam_from_world,
                    const RenderOptions& options, cv::Mat* depth = nullptr);
 

@@ -46,8 +46,16 @@ TEST(RenderView, KnownPointsLandWhereTheyProject) {
   options.antialiasing = Antialiasing::kNone;
   Camera distorted = Camera::Create(1, CameraModelId::kSimpleRadial, 300, 320, 240);
   distorted.params[3] = -0.08;
+  // A 190-degree fisheye (it sees the ground behind its image plane) and a full sphere.
+  Camera fisheye =
+      Camera::Create(1, CameraModelId::kOpenCVFisheye, 160 / (95 * M_PI / 180), 320, 320);
+  fisheye.params[4] = 0.02;
+  fisheye.params[5] = -0.005;
+  const Camera sphere = Camera::Create(1, CameraModelId::kEquirectangular, 0, 320, 160);
   for (const Camera& camera :
-       {Camera::Create(1, CameraModelId::kPinhole, 300, 320, 240), distorted}) {
+       {Camera::Create(1, CameraModelId::kPinhole, 300, 320, 240), distorted, fisheye, sphere}) {
+    SCOPED_TRACE(camera.ModelName());
+    const bool perspective = camera.Projection() == CameraProjection::kPerspective;
     // From the -y side and above: points of the roof's near slope (ridge at y = 0, z = 7.4,
     // eaves at y = -3.7, z = 5.6) and of the ground between the camera and the plaza, where
     // nothing can hide them.
@@ -59,20 +67,31 @@ TEST(RenderView, KnownPointsLandWhereTheyProject) {
       for (const double y : {-0.9, -1.85, -2.8})
         points.emplace_back(x, y, 5.6 + 1.8 * (3.7 + y) / 3.7);
       points.emplace_back(x, -12, 0.0);
+      // For the wide lenses, the ground below and behind the camera, 70 to 100 degrees off
+      // its axis (a perspective lens cannot see it; with distortion folding back it might
+      // show it at a wrong pixel).
+      if (!perspective) {
+        for (const double y : {-21.5, -23.0, -24.5, -26.0, -27.0}) points.emplace_back(x, y, 0.0);
+      }
     }
-    int num_checked = 0;
+    int num_checked = 0, num_behind = 0;
     for (const Eigen::Vector3d& point : points) {
       const Eigen::Vector3d point_in_cam = cam_from_world * point;
+      if (perspective && point_in_cam.z() <= 0) continue;
       const Eigen::Vector2d xy = camera.ImgFromCam(point_in_cam);
       const int col = static_cast<int>(std::floor(xy.x())),
                 row = static_cast<int>(std::floor(xy.y()));
       if (col < 0 || row < 0 || col >= depth.cols || row >= depth.rows) continue;
-      // Half a pixel of offset changes the depth by well under 1% on these surfaces.
-      EXPECT_NEAR(depth.at<float>(row, col), point_in_cam.z(), 0.01 * point_in_cam.z())
-          << point.transpose();
+      // Half a pixel of offset changes the depth by well under 1% on these surfaces (2% for
+      // the coarse sphere, whose pixel spans 1.1 degrees).
+      const double expected = perspective ? point_in_cam.z() : point_in_cam.norm();
+      const double tolerance = camera.Projection() == CameraProjection::kSpherical ? 0.02 : 0.01;
+      EXPECT_NEAR(depth.at<float>(row, col), expected, tolerance * expected) << point.transpose();
       ++num_checked;
+      num_behind += point_in_cam.z() < 0;
     }
     EXPECT_GT(num_checked, 25);
+    if (!perspective) EXPECT_GE(num_behind, 4);
   }
 }
 

@@ -170,6 +170,55 @@ void SyntheticSceneOptions::Check() const {
   PARALLAX_CHECK_LE(oblique_fraction, 1.0);
   PARALLAX_CHECK_GE(gps_noise, 0.0);
   PARALLAX_CHECK(!name.empty());
+  PARALLAX_CHECK_MSG(ExistsCameraModel(static_cast<int>(camera_model)), "unknown camera model");
+  if (!camera_params.empty()) {
+    Camera camera;
+    camera.model_id = camera_model;
+    camera.width = width;
+    camera.height = height;
+    camera.params = camera_params;
+    if (static_cast<int>(camera_params.size()) != CameraModelNumParams(camera_model)) {
+      throw InputError("--camera-params: " + std::to_string(camera_params.size()) +
+                       " values, but " + CameraModelName(camera_model) + " takes " +
+                       std::to_string(CameraModelNumParams(camera_model)) + " (" +
+                       CameraModelParamsInfo(camera_model) + ")");
+    }
+    if (!camera.VerifyParams()) {
+      throw InputError("--camera-params: focal lengths must be positive and finite");
+    }
+  }
+  const CameraProjection projection = CameraModelProjection(camera_model);
+  const double max_fov = projection == CameraProjection::kPerspective ? 170.0 : 360.0;
+  if (field_of_view < 0 || field_of_view > max_fov) {
+    throw InputError("--fov: " + std::to_string(field_of_view) + " degrees is outside (0, " +
+                     std::to_string(static_cast<int>(max_fov)) + "] for " +
+                     CameraModelName(camera_model));
+  }
+}
+
+double SyntheticSceneOptions::EffectiveFocalLength() const {
+  const CameraProjection projection = CameraModelProjection(camera_model);
+  if (projection == CameraProjection::kSpherical) return 0.9 * width;
+  if (!camera_params.empty()) {
+    Camera camera;
+    camera.model_id = camera_model;
+    camera.params = camera_params;
+    return camera.MeanFocalLength();
+  }
+  if (field_of_view > 0) {
+    const double half_angle = 0.5 * field_of_view * kDegrees;
+    return projection == CameraProjection::kFisheye ? 0.5 * width / half_angle
+                                                    : 0.5 * width / std::tan(half_angle);
+  }
+  return focal_length > 0 ? focal_length : 0.9 * width;
+}
+
+Camera SyntheticCamera(const SyntheticSceneOptions& options) {
+  Camera camera = Camera::Create(1, options.camera_model, options.EffectiveFocalLength(),
+                                 options.width, options.height);
+  if (!options.camera_params.empty()) camera.params = options.camera_params;
+  camera.has_prior_focal_length = true;
+  return camera;
 }
 
 SyntheticSceneOptions::Layout SyntheticSceneLayoutFromName(const std::string& name) {
@@ -231,9 +280,7 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
   const double phase = std::uniform_real_distribution<double>(0.0, 2.0 * std::numbers::pi)(engine);
 
   Reconstruction views;
-  views.AddCamera(
-      Camera::Create(1, CameraModelId::kPinhole, focal_length, options.width, options.height));
-  views.GetCamera(1).has_prior_focal_length = true;
+  views.AddCamera(SyntheticCamera(options));
   const int n = options.num_views;
   if (options.layout == SyntheticSceneOptions::Layout::kAerial) {
     // Names from a random permutation, ids in name order: neither says where a view is.
@@ -393,21 +440,27 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
     PARALLAX_LOG(Debug) << "rendered " << image.name;
   });
 
-  const Eigen::Matrix3d K = camera.CalibrationMatrix();
-  WriteFileAtomically(output_dir / (options.name + "_par.txt"), [&](std::ostream& stream) {
-    stream << std::setprecision(17) << views.NumImages() << '\n';
-    for (const auto& [image_id, image] : views.Images()) {
-      stream << image.name;
-      WriteMatrixRow(stream, K);
-      WriteMatrixRow(stream, image.cam_from_world.rotation.toRotationMatrix());
-      const Eigen::Vector3d& t = image.cam_from_world.translation;
-      stream << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << '\n';
-    }
-  });
-  WriteFileAtomically(output_dir / "K.txt", [&](std::ostream& stream) {
-    stream << std::setprecision(17);
-    for (int r = 0; r < 3; ++r) stream << K(r, 0) << ' ' << K(r, 1) << ' ' << K(r, 2) << '\n';
-  });
+  // K.txt and the Middlebury file describe a pinhole; any other lens has gt/cameras.txt
+  // only, or a reconstruction would take K.txt for its intrinsics.
+  const bool pinhole = camera.model_id == CameraModelId::kPinhole ||
+                       camera.model_id == CameraModelId::kSimplePinhole;
+  const Eigen::Matrix3d K = pinhole ? camera.CalibrationMatrix() : Eigen::Matrix3d::Identity();
+  if (pinhole)
+    WriteFileAtomically(output_dir / (options.name + "_par.txt"), [&](std::ostream& stream) {
+      stream << std::setprecision(17) << views.NumImages() << '\n';
+      for (const auto& [image_id, image] : views.Images()) {
+        stream << image.name;
+        WriteMatrixRow(stream, K);
+        WriteMatrixRow(stream, image.cam_from_world.rotation.toRotationMatrix());
+        const Eigen::Vector3d& t = image.cam_from_world.translation;
+        stream << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << '\n';
+      }
+    });
+  if (pinhole)
+    WriteFileAtomically(output_dir / "K.txt", [&](std::ostream& stream) {
+      stream << std::setprecision(17);
+      for (int r = 0; r < 3; ++r) stream << K(r, 0) << ' ' << K(r, 1) << ' ' << K(r, 2) << '\n';
+    });
   WriteFileAtomically(output_dir / "gt" / "cameras.txt", [&](std::ostream& stream) {
     stream << "# Camera list with one line of data per camera:\n"
               "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"

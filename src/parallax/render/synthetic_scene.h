@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "parallax/geometry/gps.h"
 #include "parallax/render/renderer.h"
@@ -38,6 +39,17 @@ struct SyntheticSceneOptions {
   // Focal length in pixels; 0 picks 0.9 * width (58 degrees across). Cameras move away with
   // the focal length so the framing stays the same.
   double focal_length = 0.0;
+  // The lens: any camera model, rendered ray per pixel through the model's own
+  // unprojection. `camera_params` in COLMAP's order, when given, set it entirely (focal
+  // length and field of view are then ignored); else the model starts from the focal
+  // length with the principal point at the centre and no distortion.
+  CameraModelId camera_model = CameraModelId::kPinhole;
+  std::vector<double> camera_params;
+  // Field of view across the image width in degrees (0: from the focal length). It sets the
+  // focal length by the model's family: (width / 2) / tan(fov / 2) for a perspective lens,
+  // (width / 2) / (fov / 2) in radians for a fisheye (equidistant), above 180 for a fisheye
+  // wider than a hemisphere. A spherical camera sees everything and ignores it.
+  double field_of_view = 0.0;
   // Seed of the textures, the jitter of the poses, the lighting changes and the pixel noise.
   uint64_t seed = 0;
   // Standard deviation of Gaussian pixel noise in grey levels (0..255).
@@ -62,8 +74,13 @@ struct SyntheticSceneOptions {
   int num_threads = -1;
 
   void Check() const;
-  double EffectiveFocalLength() const { return focal_length > 0 ? focal_length : 0.9 * width; }
+  // The focal length the views are framed for: the lens's (from its parameters, its field
+  // of view or `focal_length`), 0.9 * width by default and for a spherical camera.
+  double EffectiveFocalLength() const;
 };
+
+// The camera every view is taken with (camera 1).
+Camera SyntheticCamera(const SyntheticSceneOptions& options);
 
 // Parses "ring", "hemisphere", "sequence", "aerial", "street", "twin" or "weak"; throws
 // InputError otherwise.
@@ -76,7 +93,8 @@ Antialiasing AntialiasingFromName(const std::string& name);
 // rows, two temples alike or two apart, or the town).
 SceneModelOptions SyntheticSceneModelOptions(const SyntheticSceneOptions& options);
 
-// The exact views without rendering: camera 1 (PINHOLE, principal point at the image centre),
+// The exact views without rendering: camera 1 (SyntheticCamera: by default PINHOLE with the
+// principal point at the image centre),
 // registered images 1..num_views named view_0001.png..., without keypoints. Aerial views are
 // named IMG_00001.jpg... in a random order that says nothing about where they were taken,
 // ids in name order; world x east, y north, z up, metres.
@@ -96,7 +114,8 @@ RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, 
 // Renders every view into `output_dir` (created if needed) as view_0001.png... (aerial:
 // IMG_00001.jpg... with EXIF focal length, sensor size and GPS), and writes the exact cameras:
 // `<name>_par.txt` (first line the count, then per view `name k11..k33 r11..r33 t1 t2 t3`,
-// projection K [R | t] world to camera, COLMAP's pixel convention), `K.txt` (3x3) and a COLMAP text
+// projection K [R | t] world to camera, COLMAP's pixel convention) and `K.txt` (3x3), both for a
+// pinhole camera only, and a COLMAP text
 // model gt/{cameras,images,points3D}.txt without points; aerial surveys add gt/overlap_pairs.txt,
 // one line `NAME1 NAME2 SHARED` per pair of views that see at least 30 scene points in common
 // (ComputeCovisiblePairs), and so do the hard layouts (street, twin, weak), to measure the view

@@ -1,5 +1,6 @@
 #include "parallax/scene/camera.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "parallax/util/check.h"
@@ -18,19 +19,39 @@ Camera Camera::Create(camera_t camera_id, CameraModelId model_id, double focal_l
 }
 
 double Camera::MeanFocalLength() const {
+  if (CameraModelProjection(model_id) == CameraProjection::kSpherical) {
+    return params.at(0) / (2.0 * M_PI);
+  }
   const auto idxs = CameraModelFocalIdxs(model_id);
   double sum = 0;
   for (int idx : idxs) sum += params.at(idx);
   return sum / idxs.size();
 }
 
-double Camera::FocalLengthX() const { return params.at(CameraModelFocalIdxs(model_id).front()); }
-double Camera::FocalLengthY() const { return params.at(CameraModelFocalIdxs(model_id).back()); }
+namespace {
+
+// The parameter at position `which` of a group, or a CheckError naming the model that has
+// no such group (a spherical model has no focal length or principal point).
+double GroupParam(const Camera& camera, const std::vector<int>& idxs, size_t which,
+                  const char* group) {
+  PARALLAX_CHECK_MSG(which < idxs.size() || (which == 1 && !idxs.empty()),
+                     "a " << camera.ModelName() << " camera has no " << group);
+  return camera.params.at(idxs.at(std::min(which, idxs.size() - 1)));
+}
+
+}  // namespace
+
+double Camera::FocalLengthX() const {
+  return GroupParam(*this, CameraModelFocalIdxs(model_id), 0, "focal length");
+}
+double Camera::FocalLengthY() const {
+  return GroupParam(*this, CameraModelFocalIdxs(model_id), 1, "focal length");
+}
 double Camera::PrincipalPointX() const {
-  return params.at(CameraModelPrincipalPointIdxs(model_id)[0]);
+  return GroupParam(*this, CameraModelPrincipalPointIdxs(model_id), 0, "principal point");
 }
 double Camera::PrincipalPointY() const {
-  return params.at(CameraModelPrincipalPointIdxs(model_id)[1]);
+  return GroupParam(*this, CameraModelPrincipalPointIdxs(model_id), 1, "principal point");
 }
 
 void Camera::SetFocalLength(double focal_length) {

@@ -24,6 +24,7 @@ struct Camera {
                        size_t width, size_t height);
 
   std::string ModelName() const { return CameraModelName(model_id); }
+  // The mean of the focal lengths; a spherical camera's pixels per radian on the equator.
   double MeanFocalLength() const;
   double FocalLengthX() const;
   double FocalLengthY() const;
@@ -41,12 +42,19 @@ struct Camera {
   Eigen::Vector2d ImgFromCam(const Eigen::Vector3d& point_in_cam) const {
     return CameraModelImgFromCam(model_id, params, point_in_cam);
   }
-  // Normalised coordinates (z = 1) of a pixel.
+  // Normalised coordinates (z = 1) of a pixel, for rays in front of the camera.
   Eigen::Vector2d CamFromImg(const Eigen::Vector2d& xy) const {
     return CameraModelCamFromImg(model_id, params, xy);
   }
-  // A pixel threshold expressed in normalised coordinates.
-  double CamFromImgThreshold(double threshold_px) const { return threshold_px / MeanFocalLength(); }
+  // The unit ray of a pixel, in front of the camera or (wide lenses) behind it.
+  Eigen::Vector3d CamRayFromImg(const Eigen::Vector2d& xy) const {
+    return CameraModelCamRayFromImg(model_id, params, xy);
+  }
+  // A pixel threshold expressed in normalised coordinates (radians near the axis).
+  double CamFromImgThreshold(double threshold_px) const {
+    return CameraModelCamFromImgThreshold(model_id, params, threshold_px);
+  }
+  CameraProjection Projection() const { return CameraModelProjection(model_id); }
 };
 
 }  // namespace parallax

@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -166,6 +168,47 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// Files COLMAP 4.2 wrote with one camera of each of its 18 models (testdata/.../README.md):
+// its model ids, names and parameter counts are Parallax's, and Parallax writes the binary
+// file back byte for byte.
+TEST(ColmapIo, ReadsEveryCameraModelColmap42Writes) {
+  const std::filesystem::path dir = std::filesystem::path(PARALLAX_SOURCE_DIR) /
+                                    "src/parallax/scene/testdata/colmap42_camera_models";
+  std::ifstream binary_file(dir / "cameras.bin", std::ios::binary);
+  std::ifstream text_file(dir / "cameras.txt");
+  ASSERT_TRUE(binary_file && text_file);
+  const std::string binary_bytes((std::istreambuf_iterator<char>(binary_file)),
+                                 std::istreambuf_iterator<char>());
+  Reconstruction from_binary, from_text;
+  std::istringstream binary_stream(binary_bytes);
+  ReadCamerasBinary(binary_stream, "cameras.bin", &from_binary);
+  ReadCamerasText(text_file, "cameras.txt", &from_text);
+  ASSERT_EQ(from_binary.NumCameras(), 18u);
+  ASSERT_EQ(from_text.NumCameras(), 18u);
+  std::set<CameraModelId> models;
+  for (const auto& [camera_id, camera] : from_binary.Cameras()) {
+    const Camera& text_camera = from_text.GetCamera(camera_id);
+    SCOPED_TRACE(text_camera.ModelName());
+    // The binary file holds COLMAP's numeric id, the text file its name.
+    EXPECT_EQ(camera.model_id, text_camera.model_id);
+    EXPECT_EQ(camera.params, text_camera.params);
+    EXPECT_EQ(static_cast<int>(camera.params.size()), CameraModelNumParams(camera.model_id));
+    EXPECT_TRUE(camera.VerifyParams());
+    models.insert(camera.model_id);
+  }
+  EXPECT_EQ(models.size(), std::size(kCameraModelIds));
+  std::ostringstream written;
+  WriteCamerasBinary(from_binary, written);
+  EXPECT_TRUE(written.str() == binary_bytes);
+  // A camera's parameters in COLMAP's order: OPENCV_FISHEYE is fx, fy, cx, cy, k1..k4.
+  const Camera& fisheye = from_text.GetCamera(6);
+  EXPECT_EQ(fisheye.model_id, CameraModelId::kOpenCVFisheye);
+  EXPECT_EQ(fisheye.params,
+            std::vector<double>({300, 310, 320, 240, 0.01, -0.002, 0.0003, -0.0004}));
+  EXPECT_EQ(from_text.GetCamera(18).model_id, CameraModelId::kEquirectangular);
+  EXPECT_EQ(from_text.GetCamera(18).params, std::vector<double>({2048, 1024}));
+}
 
 TEST(ColmapIo, TextRoundTripPreservesEverything) {
   const Reconstruction reconstruction = MakeReconstruction();
@@ -391,8 +434,8 @@ TEST(ColmapIo, MalformedTextRaisesInputError) {
                    "cameras.txt:1", "invalid parameter '5x0'");
   ExpectInputError([&] { ReadTextModel("\n1 PINHOLE 640 480 500 320 240\n", images, points); },
                    "cameras.txt:2", "PINHOLE takes 4 parameters, got 3");
-  ExpectInputError([&] { ReadTextModel("1 FISHEYE 640 480 500 320 240\n", images, points); },
-                   "cameras.txt:1", "unknown camera model 'FISHEYE'");
+  ExpectInputError([&] { ReadTextModel("1 FISHEYE_42 640 480 500 320 240\n", images, points); },
+                   "cameras.txt:1", "unknown camera model 'FISHEYE_42'");
   ExpectInputError([&] { ReadTextModel("1 PINHOLE 640 480 -500 500 320 240\n", images, points); },
                    "cameras.txt:1", "invalid parameters");
   ExpectInputError([&] { ReadTextModel(cameras + cameras, images, points); }, "cameras.txt:4",

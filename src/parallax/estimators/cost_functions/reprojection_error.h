@@ -34,7 +34,8 @@ inline void ProjectWithJacobians(const double* camera_params, const Eigen::Vecto
     d_params.row(1) = y.v.template tail<kNumParams>().transpose();
     return;
   }
-  if constexpr (CameraModel::kNumExtraParams == 0) {
+  if constexpr (CameraModel::kProjection == CameraProjection::kPerspective &&
+                !CameraModel::kHasClosedForm && CameraModel::kNumExtraParams == 0) {
     // A pinhole's Jacobian by hand: the dual numbers cost more than the rest of a bundle
     // adjustment's linearisation. Written as Ceres' Jet arithmetic evaluates it (the
     // quotient as a product with 1/w), so that both give the same bits.

@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <vector>
 
+#include "parallax/geometry/testing/camera_model_params.h"
 #include "parallax/math/random.h"
 
 namespace parallax {
@@ -29,15 +32,15 @@ Observation RandomObservation() {
                      .normalized();
   obs.translation =
       Eigen::Vector3d(RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0), RandomGaussian(0.0, 1.0));
-  const Eigen::Vector3d in_cam(RandomUniformReal(-1.0, 1.0), RandomUniformReal(-1.0, 1.0),
-                               RandomUniformReal(2.0, 6.0));
+  // A point along one of the model's test rays (up to 95 degrees off the axis for fisheyes,
+  // the whole sphere for EQUIRECTANGULAR), with test intrinsics perturbed by up to 2 %.
+  const std::vector<Eigen::Vector3d> rays = TestRays(Model::kId);
+  const Eigen::Vector3d ray =
+      rays[static_cast<size_t>(RandomUniformInteger(0, static_cast<int64_t>(rays.size()) - 1))];
+  const Eigen::Vector3d in_cam = RandomUniformReal(2.0, 6.0) * ray;
   obs.point = obs.rotation.inverse() * (in_cam - obs.translation);
-  obs.params.assign(Model::kNumParams, 0.0);
-  for (int idx : Model::kFocalIdxs) obs.params[idx] = RandomUniformReal(400.0, 1600.0);
-  for (int idx : Model::kPrincipalPointIdxs) obs.params[idx] = RandomUniformReal(200.0, 400.0);
-  for (int k = 0; k < Model::kNumParams; ++k) {
-    if (obs.params[k] == 0.0) obs.params[k] = RandomUniformReal(-0.05, 0.05);
-  }
+  obs.params = TestCameraParams(Model::kId);
+  for (double& param : obs.params) param *= RandomUniformReal(0.98, 1.02);
   obs.observed = Eigen::Vector2d(RandomUniformReal(0.0, 640.0), RandomUniformReal(0.0, 480.0));
   return obs;
 }
@@ -99,11 +102,59 @@ void ExpectAnalyticMatchesAutoDiff() {
 
 TEST(ReprojectionErrorCostFunction, AnalyticJacobiansMatchAutomaticForEveryModel) {
   SetPRNGSeed(11);
-  ExpectAnalyticMatchesAutoDiff<SimplePinholeModel>();
-  ExpectAnalyticMatchesAutoDiff<PinholeModel>();
-  ExpectAnalyticMatchesAutoDiff<SimpleRadialModel>();
-  ExpectAnalyticMatchesAutoDiff<RadialModel>();
-  ExpectAnalyticMatchesAutoDiff<OpenCVModel>();
+#define PARALLAX_EXPECT_ANALYTIC(Name) ExpectAnalyticMatchesAutoDiff<Name##Model>();
+  PARALLAX_CAMERA_MODELS(PARALLAX_EXPECT_ANALYTIC)
+#undef PARALLAX_EXPECT_ANALYTIC
+}
+
+// The dual numbers' Jacobians of every model's projection, with respect to the point in
+// camera coordinates and to the intrinsics, against central differences of the projection.
+template <typename Model>
+void ExpectProjectionJacobiansMatchFiniteDifferences() {
+  SCOPED_TRACE(Model::kName);
+  constexpr int kNumParams = Model::kNumParams;
+  for (int trial = 0; trial < 30; ++trial) {
+    const Observation obs = RandomObservation<Model>();
+    const Eigen::Vector3d in_cam = obs.rotation * obs.point + obs.translation;
+    Eigen::Vector2d img;
+    Eigen::Matrix<double, 2, 3> d_img_d_cam;
+    Eigen::Matrix<double, 2, kNumParams, Eigen::RowMajor> d_img_d_params;
+    ProjectWithJacobians<Model>(obs.params.data(), in_cam, &img, &d_img_d_cam,
+                                d_img_d_params.data());
+    const auto project = [&](const std::vector<double>& params, const Eigen::Vector3d& point) {
+      Eigen::Vector2d xy;
+      Model::ImgFromCam(params.data(), point.x(), point.y(), point.z(), &xy.x(), &xy.y());
+      return xy;
+    };
+    EXPECT_LT((project(obs.params, in_cam) - img).norm(), 1e-9);
+    for (int axis = 0; axis < 3; ++axis) {
+      const double h = 1e-6 * in_cam.norm();
+      Eigen::Vector3d plus = in_cam, minus = in_cam;
+      plus[axis] += h;
+      minus[axis] -= h;
+      const Eigen::Vector2d numeric =
+          (project(obs.params, plus) - project(obs.params, minus)) / (2 * h);
+      EXPECT_LT((numeric - d_img_d_cam.col(axis)).norm(), 1e-5 * (1.0 + numeric.norm()))
+          << "point axis " << axis;
+    }
+    for (int k = 0; k < kNumParams; ++k) {
+      const double h = 1e-6 * std::max(1.0, std::abs(obs.params[k]));
+      std::vector<double> plus = obs.params, minus = obs.params;
+      plus[k] += h;
+      minus[k] -= h;
+      const Eigen::Vector2d numeric = (project(plus, in_cam) - project(minus, in_cam)) / (2 * h);
+      EXPECT_LT((numeric - d_img_d_params.col(k)).norm(), 1e-5 * (1.0 + numeric.norm()))
+          << "parameter " << k;
+    }
+  }
+}
+
+TEST(ReprojectionErrorCostFunction, ProjectionJacobiansMatchFiniteDifferencesForEveryModel) {
+  SetPRNGSeed(15);
+#define PARALLAX_EXPECT_FINITE_DIFFERENCES(Name) \
+  ExpectProjectionJacobiansMatchFiniteDifferences<Name##Model>();
+  PARALLAX_CAMERA_MODELS(PARALLAX_EXPECT_FINITE_DIFFERENCES)
+#undef PARALLAX_EXPECT_FINITE_DIFFERENCES
 }
 
 // Without the intrinsics' Jacobian, the pinholes' projection is written by hand; it repeats
