@@ -67,6 +67,8 @@ int RunSynth(int argc, char** argv) {
                  "may exceed 180)")
       ->check(CLI::PositiveNumber)
       ->excludes("--focal");
+  app.add_flag("--exif", options.write_exif,
+               "Write JPEG views with EXIF focal length and sensor size, as a camera does");
   app.add_option("--seed", options.seed, "Seed of textures, poses, lighting and noise")
       ->capture_default_str();
   app.add_option("--noise", options.noise_stddev, "Pixel noise standard deviation in grey levels")

@@ -23,7 +23,35 @@ namespace fs = std::filesystem;
 
 // OPENCV's (fx, fy, cx, cy, k1, k2, p1, p2) of any of Parallax's models: the model's own
 // values, zeros where it has none.
-std::array<double, 8> OpenCvParams(const Camera& camera) {
+// Whether a model's extra parameters are the first ones of OPENCV's k1, k2, p1, p2
+// (SIMPLE_RADIAL's k, RADIAL's k1, k2), or of OPENCV_FISHEYE's k1..k4 (SIMPLE_RADIAL_FISHEYE's k,
+// RADIAL_FISHEYE's k1, k2; none for SIMPLE_FISHEYE and FISHEYE).
+bool IsOpenCvFamily(CameraModelId model_id) {
+  return model_id == CameraModelId::kSimplePinhole || model_id == CameraModelId::kPinhole ||
+         model_id == CameraModelId::kSimpleRadial || model_id == CameraModelId::kRadial ||
+         model_id == CameraModelId::kOpenCV;
+}
+bool IsOpenCvFisheyeFamily(CameraModelId model_id) {
+  return model_id == CameraModelId::kSimpleFisheye || model_id == CameraModelId::kFisheye ||
+         model_id == CameraModelId::kSimpleRadialFisheye ||
+         model_id == CameraModelId::kRadialFisheye || model_id == CameraModelId::kOpenCVFisheye;
+}
+
+// A camera's focal lengths, principal point and the four coefficients of OPENCV (or, for the
+// fisheye family, of OPENCV_FISHEYE): its own values, zeros where it has none. Any other model
+// has no such form: an InputError names the format and the camera.
+void RequireModelFamily(const Camera& camera, const std::string& format, bool fisheye_allowed) {
+  if (!IsOpenCvFamily(camera.model_id) &&
+      !(fisheye_allowed && IsOpenCvFisheyeFamily(camera.model_id))) {
+    throw InputError(format + ": camera " + std::to_string(camera.camera_id) + " is " +
+                     camera.ModelName() + ", which " + format +
+                     " cannot describe; write undistorted images first (parallax undistort)");
+  }
+}
+
+std::array<double, 8> OpenCvParams(const Camera& camera, const std::string& format,
+                                   bool fisheye_allowed = false) {
+  RequireModelFamily(camera, format, fisheye_allowed);
   std::array<double, 8> opencv = {camera.FocalLengthX(),
                                   camera.FocalLengthY(),
                                   camera.PrincipalPointX(),
@@ -32,25 +60,45 @@ std::array<double, 8> OpenCvParams(const Camera& camera) {
                                   0,
                                   0,
                                   0};
-  // Every model's extra parameters are OPENCV's first ones, in order: SIMPLE_RADIAL's k and
-  // RADIAL's k1, k2 are k1 (and k2); OPENCV's are k1, k2, p1, p2.
   const std::vector<int> extra = CameraModelExtraIdxs(camera.model_id);
   for (size_t i = 0; i < extra.size(); ++i) opencv[4 + i] = camera.params[extra[i]];
   return opencv;
 }
 
+// nerfstudio's name for a camera's projection: OPENCV, OPENCV_FISHEYE or EQUIRECTANGULAR.
+std::string NerfstudioCameraModel(const Camera& camera) {
+  if (camera.model_id == CameraModelId::kEquirectangular) return "EQUIRECTANGULAR";
+  return IsOpenCvFisheyeFamily(camera.model_id) ? "OPENCV_FISHEYE" : "OPENCV";
+}
+
 void AddIntrinsics(const Camera& camera, nlohmann::json* json) {
-  const std::array<double, 8> p = OpenCvParams(camera);
+  (*json)["w"] = camera.width;
+  (*json)["h"] = camera.height;
+  if (camera.model_id == CameraModelId::kEquirectangular) {
+    // nerfstudio's equirectangular rays: azimuth pi (x - cx) / fl_x over [-pi, pi] and
+    // elevation from (y - cy) / fl_y over [-1/2, 1/2].
+    (*json)["fl_x"] = camera.params[0] / 2;
+    (*json)["fl_y"] = camera.params[1];
+    (*json)["cx"] = camera.params[0] / 2;
+    (*json)["cy"] = camera.params[1] / 2;
+    return;
+  }
+  const std::array<double, 8> p = OpenCvParams(camera, "nerfstudio", /*fisheye_allowed=*/true);
   (*json)["fl_x"] = p[0];
   (*json)["fl_y"] = p[1];
   (*json)["cx"] = p[2];
   (*json)["cy"] = p[3];
-  (*json)["k1"] = p[4];
-  (*json)["k2"] = p[5];
-  (*json)["p1"] = p[6];
-  (*json)["p2"] = p[7];
-  (*json)["w"] = camera.width;
-  (*json)["h"] = camera.height;
+  if (IsOpenCvFisheyeFamily(camera.model_id)) {
+    (*json)["k1"] = p[4];
+    (*json)["k2"] = p[5];
+    (*json)["k3"] = p[6];
+    (*json)["k4"] = p[7];
+  } else {
+    (*json)["k1"] = p[4];
+    (*json)["k2"] = p[5];
+    (*json)["p1"] = p[6];
+    (*json)["p2"] = p[7];
+  }
 }
 
 // The 4 x 4 camera-to-world matrix in OpenGL axes (x right, y up, z back).
@@ -80,11 +128,20 @@ std::ostream& Exact(std::ostream& stream) {
 nlohmann::json NerfstudioTransforms(const Reconstruction& model,
                                     const NerfstudioExportOptions& options) {
   nlohmann::json transforms;
-  transforms["camera_model"] = "OPENCV";
   std::set<camera_t> cameras;
+  std::set<std::string> camera_models;
   for (const image_t image_id : model.RegImageIds()) {
-    cameras.insert(model.GetImage(image_id).camera_id);
+    const camera_t camera_id = model.GetImage(image_id).camera_id;
+    cameras.insert(camera_id);
+    camera_models.insert(NerfstudioCameraModel(model.GetCamera(camera_id)));
   }
+  // transforms.json has one camera_model for all frames.
+  if (camera_models.size() > 1) {
+    throw InputError("nerfstudio: the model mixes " + *camera_models.begin() + " and " +
+                     *camera_models.rbegin() +
+                     " cameras, and transforms.json has one camera model for all frames");
+  }
+  transforms["camera_model"] = camera_models.empty() ? "OPENCV" : *camera_models.begin();
   const bool shared = cameras.size() == 1;
   if (shared) AddIntrinsics(model.GetCamera(*cameras.begin()), &transforms);
   nlohmann::json frames = nlohmann::json::array();
@@ -195,7 +252,7 @@ void WriteBundler(const Reconstruction& model, const fs::path& bundle_path,
       continue;
     }
     const Camera& camera = model.GetCamera(image.camera_id);
-    const std::array<double, 8> p = OpenCvParams(camera);
+    const std::array<double, 8> p = OpenCvParams(camera, "Bundler");
     approximated |= p[0] != p[1] || p[6] != 0 || p[7] != 0;
     bundle << (p[0] + p[1]) / 2 << " " << p[4] << " " << p[5] << "\n";
     const Eigen::Matrix3d R = flip * image.cam_from_world.rotation.toRotationMatrix();
@@ -236,6 +293,7 @@ void WriteNvm(const Reconstruction& model, const fs::path& path) {
   for (const image_t id : image_ids) {
     const Image& image = model.GetImage(id);
     const Camera& camera = model.GetCamera(image.camera_id);
+    RequireModelFamily(camera, "NVM", /*fisheye_allowed=*/false);
     const double f = camera.MeanFocalLength();
     double r = 0;
     if (camera.model_id == CameraModelId::kSimpleRadial) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -115,6 +116,60 @@ PlyContents ReadPly(const fs::path& path) {
   }
   EXPECT_TRUE(stream.good());
   return ply;
+}
+
+// A fisheye goes out as nerfstudio's OPENCV_FISHEYE with k1..k4, and nerfstudio's fisheye
+// projection (OpenCV's: theta (1 + k1 theta^2 + ... + k4 theta^8) from the axis) puts every
+// observation where the model does; the sphere as EQUIRECTANGULAR; a lens no format in the
+// family describes is a one-line error naming it.
+TEST(Nerfstudio, FisheyeAndSphericalCamerasKeepTheirModels) {
+  Camera fisheye = Camera::Create(1, CameraModelId::kOpenCVFisheye, 250, 640, 480);
+  fisheye.params = {250, 252, 321, 239, 0.03, -0.01, 0.002, -0.0003};
+  const Reconstruction model = ExactModel(fisheye);
+  const nlohmann::json transforms = NerfstudioTransforms(model, {});
+  EXPECT_EQ(transforms["camera_model"], "OPENCV_FISHEYE");
+  EXPECT_FALSE(transforms.contains("p1"));
+  size_t checked = 0;
+  for (const nlohmann::json& frame : transforms["frames"]) {
+    const Image& image = model.GetImage(frame["colmap_im_id"].get<image_t>());
+    for (const Point2D& point2D : image.points2D) {
+      if (!point2D.HasPoint3D()) continue;
+      const Eigen::Vector3d in_cam =
+          image.cam_from_world * model.GetPoint3D(point2D.point3D_id).xyz;
+      const double r = in_cam.head<2>().norm(), theta = std::atan2(r, in_cam.z());
+      const double t2 = theta * theta;
+      const double theta_d = theta * (1 + transforms["k1"].get<double>() * t2 +
+                                      transforms["k2"].get<double>() * t2 * t2 +
+                                      transforms["k3"].get<double>() * t2 * t2 * t2 +
+                                      transforms["k4"].get<double>() * t2 * t2 * t2 * t2);
+      const Eigen::Vector2d xy(transforms["fl_x"].get<double>() * theta_d * in_cam.x() / r +
+                                   transforms["cx"].get<double>(),
+                               transforms["fl_y"].get<double>() * theta_d * in_cam.y() / r +
+                                   transforms["cy"].get<double>());
+      EXPECT_LT((xy - fisheye.ImgFromCam(in_cam)).norm(), 1e-9);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 20u);
+
+  const Reconstruction sphere =
+      ExactModel(Camera::Create(1, CameraModelId::kEquirectangular, 0, 2048, 1024));
+  const nlohmann::json equirect = NerfstudioTransforms(sphere, {});
+  EXPECT_EQ(equirect["camera_model"], "EQUIRECTANGULAR");
+  EXPECT_EQ(equirect["w"], 2048);
+  EXPECT_DOUBLE_EQ(equirect["cx"].get<double>(), 1024);
+
+  Camera fov = Camera::Create(1, CameraModelId::kFOV, 500, 640, 480);
+  const Reconstruction fov_model = ExactModel(fov);
+  try {
+    NerfstudioTransforms(fov_model, {});
+    ADD_FAILURE() << "a FOV camera was exported to nerfstudio";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("camera 1 is FOV"), std::string::npos) << error.what();
+  }
+  const test::ScopedTestDir dir("bundler_fisheye");
+  EXPECT_THROW(WriteBundler(model, dir.path() / "bundle.out", dir.path() / "list.txt"), InputError);
+  EXPECT_THROW(WriteNvm(model, dir.path() / "model.nvm"), InputError);
 }
 
 TEST(PlyWithCameras, PointsThenAFrustumPerCamera) {

@@ -117,9 +117,17 @@ bool IsHardLayout(SyntheticSceneOptions::Layout layout) {
          layout == SyntheticSceneOptions::Layout::kWeak;
 }
 
-std::string ViewName(int view_idx, bool aerial) {
+// Whether the views are written as JPEG with EXIF (the survey always, the rest on request).
+bool WritesExif(const SyntheticSceneOptions& options) {
+  return options.layout == SyntheticSceneOptions::Layout::kAerial || options.write_exif;
+}
+
+std::string ViewName(int view_idx, const SyntheticSceneOptions& options) {
+  const bool aerial = options.layout == SyntheticSceneOptions::Layout::kAerial;
   char name[32];
-  std::snprintf(name, sizeof(name), aerial ? "IMG_%05d.jpg" : "view_%04d.png", view_idx + 1);
+  std::snprintf(name, sizeof(name),
+                aerial ? "IMG_%05d.jpg" : (options.write_exif ? "view_%04d.jpg" : "view_%04d.png"),
+                view_idx + 1);
   return name;
 }
 
@@ -133,25 +141,31 @@ void WriteMatrixRow(std::ostream& stream, const Eigen::Matrix3d& matrix) {
   }
 }
 
-// What a drone writes into its JPEGs: focal length in mm with the sensor's size (as focal
-// plane resolution) and the 35 mm equivalent, pixel size, GPS position.
-ExifData AerialViewExif(const SyntheticSceneOptions& options, const Camera& camera,
-                        const Image& image) {
+// What a camera writes into its JPEGs: focal length in mm with the sensor's size (as focal
+// plane resolution) and the 35 mm equivalent (a spherical camera has none), pixel size; a
+// drone adds its GPS position.
+ExifData SyntheticViewExif(const SyntheticSceneOptions& options, const Camera& camera,
+                           const Image& image) {
   constexpr double kSensorWidthMm = 6.4;
+  const bool aerial = options.layout == SyntheticSceneOptions::Layout::kAerial;
   ExifData exif;
   exif.make = "Parallax";
-  exif.model = "synth aerial";
-  exif.focal_length_mm = camera.FocalLengthX() * kSensorWidthMm / camera.width;
-  exif.focal_plane_x_resolution = camera.width / (0.1 * kSensorWidthMm);  // pixels per cm
-  exif.focal_plane_resolution_unit = 3;
-  exif.focal_length_35mm = camera.FocalLengthX() * 36.0 / std::max(camera.width, camera.height);
+  exif.model = aerial ? "synth aerial" : "synth " + camera.ModelName();
+  if (camera.Projection() != CameraProjection::kSpherical) {
+    exif.focal_length_mm = camera.FocalLengthX() * kSensorWidthMm / camera.width;
+    exif.focal_plane_x_resolution = camera.width / (0.1 * kSensorWidthMm);  // pixels per cm
+    exif.focal_plane_resolution_unit = 3;
+    exif.focal_length_35mm = camera.FocalLengthX() * 36.0 / std::max(camera.width, camera.height);
+  }
   exif.pixel_x_dimension = camera.width;
   exif.pixel_y_dimension = camera.height;
-  const GeodeticPosition gps =
-      SyntheticGpsPosition(options, image.image_id, ProjectionCenter(image.cam_from_world));
-  exif.gps_latitude = gps.latitude;
-  exif.gps_longitude = gps.longitude;
-  exif.gps_altitude = gps.altitude;
+  if (aerial) {
+    const GeodeticPosition gps =
+        SyntheticGpsPosition(options, image.image_id, ProjectionCenter(image.cam_from_world));
+    exif.gps_latitude = gps.latitude;
+    exif.gps_longitude = gps.longitude;
+    exif.gps_altitude = gps.altitude;
+  }
   return exif;
 }
 
@@ -294,7 +308,7 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
       Image image;
       image.image_id = static_cast<image_t>(k + 1);
       image.camera_id = 1;
-      image.name = ViewName(k, /*aerial=*/true);
+      image.name = ViewName(k, options);
       image.cam_from_world = poses[view_of_name[k]];
       views.AddImage(std::move(image));
       views.RegisterImage(static_cast<image_t>(k + 1));
@@ -310,7 +324,7 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
       Image image;
       image.image_id = static_cast<image_t>(i + 1);
       image.camera_id = 1;
-      image.name = ViewName(i, /*aerial=*/false);
+      image.name = ViewName(i, options);
       image.cam_from_world = poses[i];
       views.AddImage(std::move(image));
       views.RegisterImage(static_cast<image_t>(i + 1));
@@ -363,7 +377,7 @@ Reconstruction SyntheticSceneViews(const SyntheticSceneOptions& options) {
     Image image;
     image.image_id = static_cast<image_t>(i + 1);
     image.camera_id = 1;
-    image.name = ViewName(i, /*aerial=*/false);
+    image.name = ViewName(i, options);
     image.cam_from_world = LookAt(center, target);
     views.AddImage(std::move(image));
     views.RegisterImage(static_cast<image_t>(i + 1));
@@ -420,7 +434,7 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
   CreateDirectoryOrThrow(output_dir / "gt");
 
   // Whole views per thread: rendering and encoding then both run in parallel.
-  const bool aerial = options.layout == SyntheticSceneOptions::Layout::kAerial;
+  const bool exif = WritesExif(options);
   const std::vector<image_t> image_ids = views.RegImageIds();
   ParallelFor(0, image_ids.size(), options.num_threads, [&](size_t i) {
     const Image& image = views.GetImage(image_ids[i]);
@@ -428,9 +442,9 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
     render_options.num_threads = 1;
     const cv::Mat rendered = RenderView(scene, camera, image.cam_from_world, render_options);
     const std::string encoded =
-        aerial ? InsertJpegExif(EncodeJpeg(rendered, 92),
-                                EncodeExifTiff(AerialViewExif(options, camera, image)))
-               : EncodePng(rendered);
+        exif ? InsertJpegExif(EncodeJpeg(rendered, 92),
+                              EncodeExifTiff(SyntheticViewExif(options, camera, image)))
+             : EncodePng(rendered);
     WriteFileAtomically(
         output_dir / image.name,
         [&encoded](std::ostream& stream) {
@@ -490,7 +504,7 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
               "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
               "# Number of points: 0, mean track length: 0\n";
   });
-  if (aerial || IsHardLayout(options.layout)) {
+  if (options.layout == SyntheticSceneOptions::Layout::kAerial || IsHardLayout(options.layout)) {
     const Timer covisibility_timer;
     CovisibilityOptions covisibility_options;
     covisibility_options.seed = options.seed;

@@ -50,6 +50,9 @@ struct SyntheticSceneOptions {
   // (width / 2) / (fov / 2) in radians for a fisheye (equidistant), above 180 for a fisheye
   // wider than a hemisphere. A spherical camera sees everything and ignores it.
   double field_of_view = 0.0;
+  // Write the views as JPEG (view_0001.jpg...) with EXIF focal length and sensor size, as a
+  // camera does (the aerial survey always does, with GPS).
+  bool write_exif = false;
   // Seed of the textures, the jitter of the poses, the lighting changes and the pixel noise.
   uint64_t seed = 0;
   // Standard deviation of Gaussian pixel noise in grey levels (0..255).
@@ -111,8 +114,9 @@ GeodeticPosition SyntheticGpsPosition(const SyntheticSceneOptions& options, imag
 // Lighting, noise and blur of view `view_idx` (0-based).
 RenderOptions SyntheticSceneRenderOptions(const SyntheticSceneOptions& options, int view_idx);
 
-// Renders every view into `output_dir` (created if needed) as view_0001.png... (aerial:
-// IMG_00001.jpg... with EXIF focal length, sensor size and GPS), and writes the exact cameras:
+// Renders every view into `output_dir` (created if needed) as view_0001.png... (write_exif:
+// view_0001.jpg with EXIF focal length and sensor size; aerial: IMG_00001.jpg... with GPS
+// too), and writes the exact cameras:
 // `<name>_par.txt` (first line the count, then per view `name k11..k33 r11..r33 t1 t2 t3`,
 // projection K [R | t] world to camera, COLMAP's pixel convention) and `K.txt` (3x3), both for a
 // pinhole camera only, and a COLMAP text

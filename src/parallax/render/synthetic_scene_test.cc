@@ -346,5 +346,40 @@ TEST(SyntheticScene, AerialJpegsCarryExifFocalAndGps) {
   std::filesystem::remove_all(dir);
 }
 
+// Any lens: the views are rendered through the model, the ground truth names it, EXIF tells
+// its focal length, and no pinhole K.txt is written for a reconstruction to mistake.
+TEST_F(SyntheticSceneTest, AFisheyeSceneCarriesItsModelAndExifFocal) {
+  SyntheticSceneOptions options;
+  options.num_views = 3;
+  options.width = 160;
+  options.height = 160;
+  options.camera_model = CameraModelId::kOpenCVFisheye;
+  options.field_of_view = 190;
+  options.write_exif = true;
+  options.num_threads = 2;
+  const double focal = 80 / (95 * M_PI / 180);
+  EXPECT_NEAR(options.EffectiveFocalLength(), focal, 1e-9);
+  const Reconstruction views = GenerateSyntheticScene(options, dir_);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "K.txt"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "synth_par.txt"));
+  const Reconstruction gt = ReadReconstruction(dir_ / "gt");
+  ASSERT_EQ(gt.NumCameras(), 1u);
+  EXPECT_EQ(gt.GetCamera(1).model_id, CameraModelId::kOpenCVFisheye);
+  EXPECT_NEAR(gt.GetCamera(1).FocalLengthX(), focal, 1e-9);
+  for (const auto& [image_id, image] : views.Images()) {
+    EXPECT_EQ(std::filesystem::path(image.name).extension(), ".jpg");
+    const std::optional<ExifData> exif = ReadExif(dir_ / image.name);
+    ASSERT_TRUE(exif.has_value()) << image.name;
+    EXPECT_NEAR(*FocalLengthPixelsFromExif(*exif, 160, 160), focal, 0.01);
+    EXPECT_FALSE(exif->gps_latitude.has_value());
+  }
+  // Parameters that do not fit the model, and a perspective field of view past 170, fail.
+  options.camera_params = {100, 80, 80};
+  EXPECT_THROW(options.Check(), InputError);
+  options.camera_params.clear();
+  options.camera_model = CameraModelId::kPinhole;
+  EXPECT_THROW(options.Check(), InputError);
+}
+
 }  // namespace
 }  // namespace parallax
