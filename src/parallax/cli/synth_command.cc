@@ -104,10 +104,13 @@ int RunSynth(int argc, char** argv) {
     const Timer timer;
     const Reconstruction views = GenerateSyntheticScene(options, output_dir);
     std::cout << "synth: " << views.NumImages() << " views (" << layout << ", " << options.width
-              << "x" << options.height << ", " << views.GetCamera(1).ModelName()
-              << ", f = " << options.EffectiveFocalLength() << " px) in " << output_dir
-              << "; cameras in "
-              << (views.GetCamera(1).model_id == CameraModelId::kPinhole
+              << "x" << options.height << ", " << views.GetCamera(1).ModelName();
+    if (views.GetCamera(1).Projection() != CameraProjection::kSpherical) {
+      std::cout << ", f = " << options.EffectiveFocalLength() << " px";
+    }
+    std::cout << ") in " << output_dir << "; cameras in "
+              << (views.GetCamera(1).model_id == CameraModelId::kPinhole ||
+                          views.GetCamera(1).model_id == CameraModelId::kSimplePinhole
                       ? options.name + "_par.txt, K.txt, gt/; "
                       : std::string("gt/; "))
               << timer.ElapsedSeconds() << " s" << std::endl;

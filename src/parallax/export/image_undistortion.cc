@@ -128,17 +128,36 @@ void UndistortionOptions::Check() const {
 
 Camera UndistortedCamera(const Camera& camera, const UndistortionOptions& options) {
   options.Check();
+  if (camera.Projection() == CameraProjection::kSpherical) {
+    throw InputError("camera " + std::to_string(camera.camera_id) + " is " + camera.ModelName() +
+                     ": a sphere has no single pinhole view (perspective faces are not written "
+                     "yet)");
+  }
   const double fx = camera.FocalLengthX(), fy = camera.FocalLengthY();
   const double cx = camera.PrincipalPointX(), cy = camera.PrincipalPointY();
   const double width = static_cast<double>(camera.width);
   const double height = static_cast<double>(camera.height);
   // Where the centres of the photo's border pixels land in a PINHOLE view with its focal
   // lengths and principal point: the outline of what the photo shows, undistorted.
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  // A pixel whose ray is at or behind the image plane (a fisheye wider than 180 degrees)
+  // lands infinitely far out, on its side: it never limits a crop (blank_pixels 0), and a
+  // view keeping all of the photo (blank_pixels 1) is then as large as allowed. (COLMAP's
+  // unprojection falls back to the pixel's fisheye coordinates there, which gives an outline
+  // that is neither.)
   const auto undistort = [&](double x, double y) {
+    if (camera.Projection() != CameraProjection::kPerspective) {
+      const Eigen::Vector3d ray = camera.CamRayFromImg(Eigen::Vector2d(x, y));
+      if (ray.z() <= 1e-9) {
+        const auto far = [&](double side, double centre) {
+          return side == 0 ? centre : std::copysign(kInfinity, side);
+        };
+        return Eigen::Vector2d(far(ray.x(), cx), far(ray.y(), cy));
+      }
+    }
     const Eigen::Vector2d ray = camera.CamFromImg(Eigen::Vector2d(x, y));
     return Eigen::Vector2d(fx * ray.x() + cx, fy * ray.y() + cy);
   };
-  constexpr double kInfinity = std::numeric_limits<double>::infinity();
   double left_min = kInfinity, left_max = -kInfinity, right_min = kInfinity, right_max = -kInfinity,
          top_min = kInfinity, top_max = -kInfinity, bottom_min = kInfinity, bottom_max = -kInfinity;
   for (size_t row = 0; row < camera.height; ++row) {

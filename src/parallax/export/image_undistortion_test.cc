@@ -79,6 +79,45 @@ TEST(UndistortedCamera, CropsToValidPixelsOrKeepsAllOfThePhoto) {
 // The undistorted image of a distorted render is the render of the same view by the ideal
 // pinhole camera. Both are rendered as a camera takes photos: each pixel integrates its area
 // (3 x 3 rays) and the lens blurs a little (sigma 0.5 px), so neither aliases.
+// A 150-degree OPENCV_FISHEYE as Parallax refined it on a synthetic GoPro-like scene, and
+// the PINHOLE camera COLMAP 4.2's image_undistorter made of it (default options): the same.
+TEST(UndistortedCamera, AFisheyeBecomesColmapsPinhole) {
+  Camera fisheye;
+  fisheye.camera_id = 1;
+  fisheye.model_id = CameraModelId::kOpenCVFisheye;
+  fisheye.width = 640;
+  fisheye.height = 480;
+  fisheye.params = {244.86510848011702,     245.4720216160195,      319.95439136096593,
+                    240.17237089142409,     0.047745042994425467,   -0.0077812974090392586,
+                    0.00088963640426582542, -8.9451580210456836e-05};
+  const Camera pinhole = UndistortedCamera(fisheye, {});
+  EXPECT_EQ(pinhole.model_id, CameraModelId::kPinhole);
+  EXPECT_EQ(pinhole.width, 1280u);
+  EXPECT_EQ(pinhole.height, 674u);
+  const std::vector<double> colmap = {244.86510848011702, 245.4720216160195, 639.90878272193186,
+                                      337.24203746004133};
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(pinhole.params[i], colmap[i], 1e-6) << i;
+}
+
+// Wider than 180 degrees: border pixels behind the image plane never limit the crop, and
+// every pixel of the cropped view comes from the photo.
+TEST(UndistortedCamera, AFisheyeWiderThanAHemisphereCropsToThePhoto) {
+  Camera fisheye =
+      Camera::Create(1, CameraModelId::kOpenCVFisheye, 320 / (95 * M_PI / 180), 640, 640);
+  const Camera pinhole = UndistortedCamera(fisheye, {});
+  EXPECT_GT(pinhole.width, 640u);
+  EXPECT_LE(pinhole.width, 1280u);
+  for (double x = 0.5; x < pinhole.width; x += pinhole.width / 16.0) {
+    for (double y = 0.5; y < pinhole.height; y += pinhole.height / 16.0) {
+      const Eigen::Vector2d xy = fisheye.ImgFromCam(pinhole.CamFromImg({x, y}).homogeneous());
+      EXPECT_TRUE(xy.x() >= 0 && xy.x() <= 640 && xy.y() >= 0 && xy.y() <= 640) << x << " " << y;
+    }
+  }
+  UndistortionOptions keep_all;
+  keep_all.blank_pixels = 1;
+  EXPECT_EQ(UndistortedCamera(fisheye, keep_all).width, 1280u);  // As large as allowed.
+}
+
 TEST(UndistortImage, MatchesAnIdealPinholeRenderOfTheSameView) {
   const SceneModel scene;
   RenderOptions render;
