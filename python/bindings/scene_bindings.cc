@@ -213,6 +213,31 @@ void BindCamera(py::module_& m) {
             return FromPoints(points);
           },
           py::arg("pixels"), "Normalised image points (N x 2, z = 1) of pixels (N x 2).")
+      .def(
+          "cam_ray_from_img",
+          [](const Camera& camera, const py::array& pixels) {
+            std::vector<Eigen::Vector3d> rays;
+            for (const Eigen::Vector2d& xy : ToPoints2D(pixels, "pixels")) {
+              rays.push_back(camera.CamRayFromImg(xy));
+            }
+            return FromPoints(rays);
+          },
+          py::arg("pixels"),
+          "Unit rays (N x 3) of pixels (N x 2) in the camera frame, behind the image plane too "
+          "(fisheyes wider than 180 degrees, EQUIRECTANGULAR).")
+      .def_property_readonly(
+          "projection",
+          [](const Camera& camera) {
+            switch (camera.Projection()) {
+              case CameraProjection::kFisheye:
+                return "fisheye";
+              case CameraProjection::kSpherical:
+                return "spherical";
+              default:
+                return "perspective";
+            }
+          },
+          "The model's family: perspective, fisheye or spherical.")
       .def("__repr__", [](const Camera& camera) {
         std::ostringstream text;
         text << "Camera(camera_id=" << camera.camera_id << ", model=" << camera.ModelName()

@@ -86,6 +86,48 @@ def test_camera_projection_round_trip_with_distortion():
     assert np.allclose(pixels, expected)
 
 
+WIDE_LENSES = [
+    ("OPENCV_FISHEYE", 640, 640, [193.0, 195.0, 320.0, 320.0, 0.02, -0.005, 0.001, -0.0002], 95),
+    ("FISHEYE", 640, 640, [193.0, 195.0, 320.0, 320.0], 95),
+    ("RADIAL_FISHEYE", 640, 640, [193.0, 320.0, 320.0, 0.02, -0.005], 95),
+    ("EUCM", 640, 480, [300.0, 305.0, 320.0, 240.0, 0.6, 1.1], 95),
+    ("DIVISION", 640, 480, [500.0, 505.0, 320.0, 240.0, -0.05], 60),
+    ("FULL_OPENCV", 640, 480,
+     [800.0, 790, 320, 240, -0.08, 0.01, 0.001, -0.002, 0.001, 0.02, -0.01, 0.002], 35),
+    ("EQUIRECTANGULAR", 2048, 1024, [2048.0, 1024.0], 175),
+]
+
+
+@pytest.mark.parametrize("model, width, height, params, max_angle", WIDE_LENSES)
+def test_every_lens_projects_and_unprojects_rays(model, width, height, params, max_angle):
+    camera = parallax.Camera(model, width, height, params)
+    assert camera.model == model
+    # Rays up to max_angle off the axis: beyond 90 degrees for the fisheyes, EUCM and the sphere.
+    rng = np.random.default_rng(7)
+    theta = np.radians(rng.uniform(0, max_angle, 200))
+    phi = rng.uniform(0, 2 * np.pi, 200)
+    rays = np.c_[np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)]
+    if model == "EQUIRECTANGULAR":
+        rays = rays[np.abs(rays[:, 1]) < 0.99]  # Away from the poles.
+    pixels = camera.img_from_cam(3.0 * rays)
+    back = camera.cam_ray_from_img(pixels)
+    assert np.allclose(np.linalg.norm(back, axis=1), 1.0)
+    assert np.allclose(back, rays, atol=1e-9)
+    expected = {"EQUIRECTANGULAR": "spherical", "EUCM": "perspective", "DIVISION": "perspective",
+                "FULL_OPENCV": "perspective"}.get(model, "fisheye")
+    assert camera.projection == expected
+
+
+def test_the_sphere_has_no_focal_length():
+    camera = parallax.Camera("EQUIRECTANGULAR", 2048, 1024, [2048.0, 1024.0])
+    # The optical axis at the centre, +x at three quarters of the width.
+    pixels = camera.img_from_cam(np.array([[0.0, 0, 1], [1.0, 0, 0]]))
+    assert np.allclose(pixels, [[1024, 512], [1536, 512]])
+    assert camera.focal_length == pytest.approx(2048 / (2 * np.pi))
+    with pytest.raises(Exception, match="no focal length"):
+        camera.K
+
+
 def test_rigid_transform_conventions():
     angle = np.radians(30)
     R = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]])

@@ -29,7 +29,8 @@ std::optional<double> ParseDouble(const std::string& token) {
 
 bool SameCamera(const Camera& a, const Camera& b) {
   return a.model_id == b.model_id && a.width == b.width && a.height == b.height &&
-         a.params == b.params && a.has_prior_focal_length == b.has_prior_focal_length;
+         a.params == b.params && a.has_prior_focal_length == b.has_prior_focal_length &&
+         a.focal_length_from_exif == b.focal_length_from_exif;
 }
 
 }  // namespace
@@ -144,6 +145,7 @@ Camera MakeCamera(const CameraSetupOptions& options, const std::optional<Eigen::
       options.default_focal_length_factor * static_cast<double>(std::max(width, height)));
   camera.params = CameraModelInitialParams(model_id, focal_length, width / 2.0, height / 2.0);
   camera.has_prior_focal_length = false;
+  camera.focal_length_from_exif = exif_focal_length.has_value();
   return camera;
 }
 

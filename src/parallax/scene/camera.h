@@ -16,8 +16,12 @@ struct Camera {
   size_t width = 0;
   size_t height = 0;
   std::vector<double> params;
-  // True when the focal length came from calibration, EXIF or the user, not a guess.
+  // True when the intrinsics are known (calibration, K, the user's parameters): bundle
+  // adjustment holds them fixed. An EXIF focal length is not known, only a good start.
   bool has_prior_focal_length = false;
+  // True when the initial focal length came from EXIF (a database stores it as COLMAP's
+  // prior_focal_length = 1, which COLMAP needs to map fisheyes).
+  bool focal_length_from_exif = false;
 
   // A camera with the principal point at the image centre and zero distortion.
   static Camera Create(camera_t camera_id, CameraModelId model_id, double focal_length,

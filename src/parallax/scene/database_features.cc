@@ -18,6 +18,19 @@ using internal::Statement;
 
 namespace {
 
+// cameras.prior_focal_length: COLMAP writes 1 for a focal length from EXIF or the user and
+// still refines it; Camera::has_prior_focal_length means known and held fixed. Parallax
+// writes 2 for that (COLMAP reads any non-zero value as its prior) and 1 for an EXIF focal
+// length, so a COLMAP database's 1 is read as a starting value that bundle adjustment
+// refines, as COLMAP's mapper does.
+constexpr int64_t kKnownIntrinsicsFlag = 2;
+constexpr int64_t kFocalLengthPriorFlag = 1;
+
+int64_t PriorFocalLengthFlag(const Camera& camera) {
+  if (camera.has_prior_focal_length) return kKnownIntrinsicsFlag;
+  return camera.focal_length_from_exif ? kFocalLengthPriorFlag : 0;
+}
+
 // Keypoint blobs are rows x 6 float32 (x, y, a11, a12, a21, a22); COLMAP also reads the older
 // 2-column (x, y) and 4-column (x, y, scale, orientation) layouts, and so do we.
 constexpr int kKeypointCols = 6;
@@ -67,7 +80,8 @@ Camera CameraFromRow(const Statement& statement, const std::filesystem::path& pa
   }
   camera.params.resize(num_bytes / sizeof(double));
   if (num_bytes > 0) std::memcpy(camera.params.data(), statement.Blob(4), num_bytes);
-  camera.has_prior_focal_length = statement.Int64(5) != 0;
+  camera.has_prior_focal_length = statement.Int64(5) == kKnownIntrinsicsFlag;
+  camera.focal_length_from_exif = statement.Int64(5) == kFocalLengthPriorFlag;
   return camera;
 }
 
@@ -106,7 +120,7 @@ camera_t Database::WriteCamera(const Camera& camera, bool use_camera_id) {
   statement.BindInt64(3, static_cast<int64_t>(camera.width));
   statement.BindInt64(4, static_cast<int64_t>(camera.height));
   statement.BindBlob(5, camera.params.data(), camera.params.size() * sizeof(double));
-  statement.BindInt64(6, camera.has_prior_focal_length ? 1 : 0);
+  statement.BindInt64(6, PriorFocalLengthFlag(camera));
   statement.Step("cannot write camera");
   return static_cast<camera_t>(sqlite3_last_insert_rowid(db_));
 }
@@ -120,7 +134,7 @@ void Database::UpdateCamera(const Camera& camera) {
   statement.BindInt64(2, static_cast<int64_t>(camera.width));
   statement.BindInt64(3, static_cast<int64_t>(camera.height));
   statement.BindBlob(4, camera.params.data(), camera.params.size() * sizeof(double));
-  statement.BindInt64(5, camera.has_prior_focal_length ? 1 : 0);
+  statement.BindInt64(5, PriorFocalLengthFlag(camera));
   statement.BindInt64(6, camera.camera_id);
   statement.Step("cannot update camera");
   PARALLAX_CHECK_MSG(sqlite3_changes(db_) == 1, "no camera " << camera.camera_id);

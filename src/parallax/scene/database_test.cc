@@ -152,6 +152,41 @@ TEST_F(DatabaseTest, CamerasRoundTrip) {
   EXPECT_THROW(database.ReadCamera(3), CheckError);
 }
 
+// COLMAP's prior_focal_length is 1 for a focal length from EXIF or the user, which its
+// mapper still refines; Parallax's known (fixed) intrinsics are written as 2, which COLMAP
+// reads as its prior too. So a COLMAP database's cameras are refined, Parallax's known ones
+// stay fixed.
+TEST_F(DatabaseTest, KnownIntrinsicsAndColmapsFocalPriorAreTold) {
+  {
+    Database database(path_);
+    Camera known = Camera::Create(kInvalidCameraId, CameraModelId::kPinhole, 1000, 640, 480);
+    known.has_prior_focal_length = true;
+    database.WriteCamera(known);
+    database.WriteCamera(
+        Camera::Create(kInvalidCameraId, CameraModelId::kOpenCVFisheye, 230, 640, 640));
+    Camera from_exif =
+        Camera::Create(kInvalidCameraId, CameraModelId::kSimpleRadial, 700, 640, 480);
+    from_exif.focal_length_from_exif = true;
+    database.WriteCamera(from_exif);
+  }
+  {
+    RawDatabase raw(path_);
+    const auto flags = raw.Query("SELECT prior_focal_length FROM cameras ORDER BY camera_id;");
+    ASSERT_EQ(flags.size(), 3u);
+    EXPECT_EQ(flags[0][0], "2");
+    EXPECT_EQ(flags[1][0], "0");
+    EXPECT_EQ(flags[2][0], "1");  // As COLMAP writes an EXIF focal length.
+    raw.Exec("UPDATE cameras SET prior_focal_length = 1 WHERE camera_id = 2;");  // COLMAP's EXIF.
+  }
+  Database database(path_);
+  EXPECT_TRUE(database.ReadCamera(1).has_prior_focal_length);
+  EXPECT_FALSE(database.ReadCamera(1).focal_length_from_exif);
+  EXPECT_FALSE(database.ReadCamera(2).has_prior_focal_length);
+  EXPECT_TRUE(database.ReadCamera(2).focal_length_from_exif);
+  EXPECT_FALSE(database.ReadCamera(3).has_prior_focal_length);
+  EXPECT_TRUE(database.ReadCamera(3).focal_length_from_exif);
+}
+
 TEST_F(DatabaseTest, ImagesRoundTrip) {
   Database database(path_);
   const camera_t camera_id =
