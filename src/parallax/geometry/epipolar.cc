@@ -75,6 +75,30 @@ void ComputeSquaredSampsonError(const std::vector<Eigen::Vector2d>& points1,
   for (size_t i = 0; i < num_points; ++i) errors[i] = SampsonError(entries, first[i], second[i]);
 }
 
+double ComputeSquaredSphericalSampsonError(const Eigen::Vector3d& ray1, const Eigen::Vector3d& ray2,
+                                           const Eigen::Matrix3d& E) {
+  const Eigen::Vector3d line2 = E * ray1;              // Epipolar plane normal in view 2.
+  const Eigen::Vector3d line1 = E.transpose() * ray2;  // And in view 1.
+  const double residual = ray2.dot(line2);
+  // The residual's gradient with respect to each ray, within the plane tangent to it.
+  const Eigen::Vector3d gradient2 = line2 - ray2.dot(line2) * ray2;
+  const Eigen::Vector3d gradient1 = line1 - ray1.dot(line1) * ray1;
+  const double denominator = gradient1.squaredNorm() + gradient2.squaredNorm();
+  return denominator > 0 ? residual * residual / denominator
+                         : std::numeric_limits<double>::infinity();
+}
+
+void ComputeSquaredSphericalSampsonError(const std::vector<Eigen::Vector3d>& rays1,
+                                         const std::vector<Eigen::Vector3d>& rays2,
+                                         const Eigen::Matrix3d& E,
+                                         std::vector<double>* squared_errors) {
+  PARALLAX_CHECK_EQ(rays1.size(), rays2.size());
+  squared_errors->resize(rays1.size());
+  for (size_t i = 0; i < rays1.size(); ++i) {
+    (*squared_errors)[i] = ComputeSquaredSphericalSampsonError(rays1[i], rays2[i], E);
+  }
+}
+
 double ComputeSquaredHomographyError(const Eigen::Vector2d& point1, const Eigen::Vector2d& point2,
                                      const Eigen::Matrix3d& H) {
   return TransferError(Entries(H), point1, point2);

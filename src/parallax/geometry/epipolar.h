@@ -18,6 +18,17 @@ void ComputeSquaredSampsonError(const std::vector<Eigen::Vector2d>& points1,
                                 const std::vector<Eigen::Vector2d>& points2,
                                 const Eigen::Matrix3d& F, std::vector<double>* squared_errors);
 
+// The Sampson error of unit rays under an essential matrix, on the sphere: the epipolar
+// residual b2^T E b1 over its gradient in the planes tangent to the two rays. To first order
+// the angle (radians) by which the rays miss a common epipolar plane; valid for rays in any
+// direction, behind the image plane too.
+double ComputeSquaredSphericalSampsonError(const Eigen::Vector3d& ray1, const Eigen::Vector3d& ray2,
+                                           const Eigen::Matrix3d& E);
+void ComputeSquaredSphericalSampsonError(const std::vector<Eigen::Vector3d>& rays1,
+                                         const std::vector<Eigen::Vector3d>& rays2,
+                                         const Eigen::Matrix3d& E,
+                                         std::vector<double>* squared_errors);
+
 // Squared transfer error ||x2 - H x1||^2 of x2 = H x1 (x1 mapped to image 2 only). A point
 // mapped to infinity gives the largest double.
 double ComputeSquaredHomographyError(const Eigen::Vector2d& point1, const Eigen::Vector2d& point2,

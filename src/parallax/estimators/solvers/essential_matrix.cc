@@ -73,9 +73,19 @@ inline Vector9d EpipolarRow(const Eigen::Vector2d& x1, const Eigen::Vector2d& x2
   return row;
 }
 
-// Four vectors spanning the null space of the epipolar system (row-major E entries).
-bool EssentialNullSpace(const std::vector<Eigen::Vector2d>& points1,
-                        const std::vector<Eigen::Vector2d>& points2,
+// The same row for unit rays (or any homogeneous 3-vectors): x2^T E x1 in E's row-major
+// entries.
+inline Vector9d EpipolarRow(const Eigen::Vector3d& x1, const Eigen::Vector3d& x2) {
+  Vector9d row;
+  row << x2.x() * x1.x(), x2.x() * x1.y(), x2.x() * x1.z(), x2.y() * x1.x(), x2.y() * x1.y(),
+      x2.y() * x1.z(), x2.z() * x1.x(), x2.z() * x1.y(), x2.z() * x1.z();
+  return row;
+}
+
+// Four vectors spanning the null space of the epipolar system (row-major E entries), of
+// normalised image points (Vector2d, z = 1) or of unit rays (Vector3d).
+template <typename Point>
+bool EssentialNullSpace(const std::vector<Point>& points1, const std::vector<Point>& points2,
                         Eigen::Matrix<double, 9, 4>* null_space) {
   const size_t num_points = points1.size();
   if (num_points == 5) {
@@ -372,11 +382,11 @@ void PolishSolution(const Eigen::Matrix<double, 10, kNumMonomials>& constraints,
   }
 }
 
-}  // namespace
-
-void EstimateEssentialMatrixFivePoint(const std::vector<Eigen::Vector2d>& points1,
-                                      const std::vector<Eigen::Vector2d>& points2,
-                                      std::vector<Eigen::Matrix3d>* models) {
+// The 5-point algorithm on normalised points or unit rays: only the epipolar rows of the
+// null space differ.
+template <typename Point>
+void FivePoint(const std::vector<Point>& points1, const std::vector<Point>& points2,
+               std::vector<Eigen::Matrix3d>* models) {
   PARALLAX_CHECK_EQ(points1.size(), points2.size());
   models->clear();
   if (points1.size() < 5) return;
@@ -484,6 +494,47 @@ void EstimateEssentialMatrixFivePoint(const std::vector<Eigen::Vector2d>& points
     if ((2.0 * E_Et * E - E_Et.trace() * E).norm() > kMaxEssentialResidual) continue;
     models->push_back(E);
   }
+}
+
+}  // namespace
+
+void EstimateEssentialMatrixFivePoint(const std::vector<Eigen::Vector2d>& points1,
+                                      const std::vector<Eigen::Vector2d>& points2,
+                                      std::vector<Eigen::Matrix3d>* models) {
+  FivePoint(points1, points2, models);
+}
+
+void EstimateEssentialMatrixFivePointFromRays(const std::vector<Eigen::Vector3d>& rays1,
+                                              const std::vector<Eigen::Vector3d>& rays2,
+                                              std::vector<Eigen::Matrix3d>* models) {
+  FivePoint(rays1, rays2, models);
+}
+
+void EstimateEssentialMatrixEightPointFromRays(const std::vector<Eigen::Vector3d>& rays1,
+                                               const std::vector<Eigen::Vector3d>& rays2,
+                                               std::vector<Eigen::Matrix3d>* models) {
+  PARALLAX_CHECK_EQ(rays1.size(), rays2.size());
+  models->clear();
+  const size_t num_rays = rays1.size();
+  if (num_rays < 8) return;
+  // Unit rays need no Hartley normalisation: every entry of a row is at most 1.
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(num_rays), 9);
+  for (size_t i = 0; i < num_rays; ++i) {
+    A.row(static_cast<Eigen::Index>(i)) = EpipolarRow(rays1[i], rays2[i]).transpose();
+  }
+  if (!A.allFinite()) return;
+  Eigen::VectorXd singular_values;
+  Eigen::MatrixXd V;
+  RightSingularSystem(A, &singular_values, &V);
+  if (!(singular_values(7) > kMinRankRatio * singular_values(0))) return;
+  const Vector9d entries = V.col(8);
+  const Eigen::Matrix3d E_unconstrained = Eigen::Map<const RowMajorMatrix3d>(entries.data());
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(E_unconstrained,
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d E = svd.matrixU() * Eigen::Vector3d(1, 1, 0).asDiagonal() *
+                            svd.matrixV().transpose() / std::sqrt(2.0);
+  if (!E.allFinite()) return;
+  models->push_back(E);
 }
 
 void EstimateEssentialMatrixEightPoint(const std::vector<Eigen::Vector2d>& points1,

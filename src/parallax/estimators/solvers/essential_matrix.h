@@ -29,6 +29,16 @@ void EstimateEssentialMatrixEightPoint(const std::vector<Eigen::Vector2d>& point
                                        const std::vector<Eigen::Vector2d>& points2,
                                        std::vector<Eigen::Matrix3d>* models);
 
+// The same two solvers on unit rays (Camera::CamRayFromImg), for lenses whose rays reach
+// behind the image plane (fisheyes wider than 180 degrees, EQUIRECTANGULAR): b2^T E b1 = 0
+// holds for rays in any direction, where normalised coordinates do not exist.
+void EstimateEssentialMatrixFivePointFromRays(const std::vector<Eigen::Vector3d>& rays1,
+                                              const std::vector<Eigen::Vector3d>& rays2,
+                                              std::vector<Eigen::Matrix3d>* models);
+void EstimateEssentialMatrixEightPointFromRays(const std::vector<Eigen::Vector3d>& rays1,
+                                               const std::vector<Eigen::Vector3d>& rays2,
+                                               std::vector<Eigen::Matrix3d>* models);
+
 // LO-RANSAC estimators (optim/ransac.h); residuals are squared Sampson errors in normalised
 // units (a pixel threshold divided by the focal length).
 using EssentialMatrixFivePointEstimator =
@@ -39,5 +49,13 @@ using EssentialMatrixFivePointEstimator =
 using EssentialMatrixEightPointEstimator =
     SolverEstimator<Eigen::Vector2d, Eigen::Vector2d, Eigen::Matrix3d, 8,
                     EstimateEssentialMatrixEightPoint, ComputeSquaredSampsonError>;
+
+// On unit rays; residuals are squared Sampson errors on the sphere (radians, to first order).
+using EssentialMatrixFivePointRayEstimator =
+    SolverEstimator<Eigen::Vector3d, Eigen::Vector3d, Eigen::Matrix3d, 5,
+                    EstimateEssentialMatrixFivePointFromRays, ComputeSquaredSphericalSampsonError>;
+using EssentialMatrixEightPointRayEstimator =
+    SolverEstimator<Eigen::Vector3d, Eigen::Vector3d, Eigen::Matrix3d, 8,
+                    EstimateEssentialMatrixEightPointFromRays, ComputeSquaredSphericalSampsonError>;
 
 }  // namespace parallax

@@ -9,6 +9,7 @@
 
 #include "parallax/estimators/testing/two_view_scene.h"
 #include "parallax/geometry/essential_matrix.h"
+#include "parallax/geometry/testing/random_geometry.h"
 #include "parallax/math/random.h"
 #include "parallax/optim/ransac.h"
 
@@ -185,6 +186,113 @@ TEST(EssentialMatrixLoRansac, NoiseAndFortyPercentOutliers) {
             180 / M_PI,
         1.0);
   }
+}
+
+// Two 360-degree cameras among points in every direction (half of them behind either
+// image plane): the unit rays of each point in both cameras.
+struct RayScene {
+  Rigid3d cam2_from_cam1;
+  std::vector<Eigen::Vector3d> rays1, rays2;
+};
+
+RayScene RandomRayScene(int num_points) {
+  RayScene scene;
+  scene.cam2_from_cam1 = test::RandomRelativePose(0.0, M_PI);
+  while (static_cast<int>(scene.rays1.size()) < num_points) {
+    const Eigen::Vector3d point = RandomUniformReal(2.0, 10.0) * RandomUnitVector();
+    const Eigen::Vector3d in_cam2 = scene.cam2_from_cam1 * point;
+    if (in_cam2.norm() < 1.0) continue;
+    scene.rays1.push_back(point.normalized());
+    scene.rays2.push_back(in_cam2.normalized());
+  }
+  return scene;
+}
+
+TEST(EssentialMatrixFromRays, FiveAndEightPointsAreExactInEveryDirection) {
+  SetPRNGSeed(21);
+  int num_behind = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const RayScene scene = RandomRayScene(5);
+    for (const Eigen::Vector3d& ray : scene.rays1) num_behind += ray.z() < 0;
+    const Eigen::Matrix3d E_true = EssentialFromPose(scene.cam2_from_cam1);
+    std::vector<Eigen::Matrix3d> models;
+    EstimateEssentialMatrixFivePointFromRays(scene.rays1, scene.rays2, &models);
+    ASSERT_FALSE(models.empty()) << "trial " << trial;
+    double best = std::numeric_limits<double>::max();
+    for (const Eigen::Matrix3d& E : models) {
+      best = std::min(best, ProjectiveDistance(E, E_true));
+      for (int i = 0; i < 5; ++i) {
+        EXPECT_LT(ComputeSquaredSphericalSampsonError(scene.rays1[i], scene.rays2[i], E), 1e-16);
+      }
+    }
+    EXPECT_LT(best, 1e-8) << "trial " << trial;
+  }
+  EXPECT_GT(num_behind, 150);  // Of 500 rays: the sphere, not a hemisphere.
+  const RayScene scene = RandomRayScene(50);
+  std::vector<Eigen::Matrix3d> models;
+  EstimateEssentialMatrixEightPointFromRays(scene.rays1, scene.rays2, &models);
+  ASSERT_EQ(models.size(), 1u);
+  EXPECT_LT(ProjectiveDistance(models[0], EssentialFromPose(scene.cam2_from_cam1)), 1e-10);
+  // Fewer than eight rays give nothing.
+  const std::vector<Eigen::Vector3d> seven1(scene.rays1.begin(), scene.rays1.begin() + 7);
+  const std::vector<Eigen::Vector3d> seven2(scene.rays2.begin(), scene.rays2.begin() + 7);
+  EstimateEssentialMatrixEightPointFromRays(seven1, seven2, &models);
+  EXPECT_TRUE(models.empty());
+}
+
+// The spherical Sampson error is, to first order, the angle by which the rays miss a common
+// epipolar plane: turn one ray out of its plane by 1 milliradian and it reads that angle,
+// shared with the other ray by the ratio of their gradients.
+TEST(EssentialMatrixFromRays, SphericalSampsonErrorIsTheAngleOffTheEpipolarPlane) {
+  SetPRNGSeed(22);
+  for (int trial = 0; trial < 50; ++trial) {
+    const RayScene scene = RandomRayScene(1);
+    const Eigen::Matrix3d E = EssentialFromPose(scene.cam2_from_cam1);
+    const Eigen::Vector3d& ray1 = scene.rays1[0];
+    const Eigen::Vector3d& ray2 = scene.rays2[0];
+    EXPECT_LT(ComputeSquaredSphericalSampsonError(ray1, ray2, E), 1e-20);
+    // The epipolar plane in view 2 has normal E ray1; tilt ray2 towards it.
+    const Eigen::Vector3d normal = (E * ray1).normalized();
+    const double angle = 1e-3;
+    const Eigen::Vector3d moved = (std::cos(angle) * ray2 + std::sin(angle) * normal).normalized();
+    // Only ray 2 moved: the residual grows by angle |E ray1| and the Sampson error shares it
+    // between the two rays' gradients (E ray1 and E^T ray2, both tangent at the true rays).
+    const double g2 = (E * ray1).norm(), g1 = (E.transpose() * ray2).norm();
+    const double error = std::sqrt(ComputeSquaredSphericalSampsonError(ray1, moved, E));
+    EXPECT_NEAR(error, angle * g2 / std::hypot(g1, g2), 1e-3 * angle);
+  }
+}
+
+// LO-RANSAC on rays: 30 % outliers, 1 milliradian of noise, the 360-degree scene.
+TEST(EssentialMatrixFromRays, RansacFindsThePoseAmongOutliers) {
+  SetPRNGSeed(23);
+  RayScene scene = RandomRayScene(400);
+  std::vector<char> is_inlier(scene.rays1.size());
+  for (size_t i = 0; i < scene.rays1.size(); ++i) {
+    is_inlier[i] = i % 10 >= 3;
+    const auto jitter = [](const Eigen::Vector3d& ray) {
+      return (ray + 1e-3 *
+                        Eigen::Vector3d(RandomGaussian(0, 1), RandomGaussian(0, 1),
+                                        RandomGaussian(0, 1)) /
+                        std::sqrt(3.0))
+          .normalized();
+    };
+    scene.rays1[i] = jitter(scene.rays1[i]);
+    scene.rays2[i] = is_inlier[i] ? jitter(scene.rays2[i]) : RandomUnitVector();
+  }
+  RansacOptions options;
+  options.max_error = 3e-3;
+  const LoRansac<EssentialMatrixFivePointRayEstimator, EssentialMatrixEightPointRayEstimator>
+      ransac(options);
+  const auto report = ransac.Estimate(scene.rays1, scene.rays2);
+  ASSERT_TRUE(report.success);
+  size_t inliers_kept = 0, outliers_kept = 0;
+  for (size_t i = 0; i < is_inlier.size(); ++i) {
+    if (report.inlier_mask[i]) (is_inlier[i] ? inliers_kept : outliers_kept)++;
+  }
+  EXPECT_GE(inliers_kept, 0.95 * 280);
+  EXPECT_LE(outliers_kept, 12u);
+  EXPECT_LT(ProjectiveDistance(report.model, EssentialFromPose(scene.cam2_from_cam1)), 0.01);
 }
 
 }  // namespace
