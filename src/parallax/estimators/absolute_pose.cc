@@ -92,23 +92,33 @@ bool RefinePoseOnly(const AbsolutePoseRefinementOptions& options,
   PoseLevenbergMarquardtOptions lm_options;
   lm_options.max_num_iterations = options.max_num_iterations;
   lm_options.min_relative_decrease = options.min_relative_decrease;
-  const bool solved = VisitCameraModel(camera.model_id, [&]<typename Model>() {
-    const auto observe = [&](size_t k, const Eigen::Vector3d& point_in_cam,
-                             Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 3>* jacobian) {
-      if (!(point_in_cam.z() > std::numeric_limits<double>::epsilon())) return false;
-      Eigen::Vector2d projection;
-      if (jacobian == nullptr) {
-        Model::ImgFromCam(params, point_in_cam.x(), point_in_cam.y(), point_in_cam.z(),
-                          &projection.x(), &projection.y());
-      } else {
-        ProjectWithJacobians<Model>(params, point_in_cam, &projection, jacobian, nullptr);
-      }
-      *residual = projection - points2D[observation_indices[k]];
-      return true;
-    };
-    const CauchyLoss loss{options.loss_scale_px * options.loss_scale_px};
-    return MinimizeOverPose(points, observe, loss, lm_options, &rotation, &translation);
-  });
+  // The model's projection through function pointers: one instantiation of the pose
+  // minimisation for every model (18 would cost the build more than the calls cost it).
+  using ProjectFn = void (*)(const double*, const Eigen::Vector3d&, Eigen::Vector2d*,
+                             Eigen::Matrix<double, 2, 3>*, double*);
+  using ImgFromCamFn = bool (*)(const double*, double, double, double, double*, double*);
+  const ProjectFn project = VisitCameraModel(
+      camera.model_id, []<typename Model>() -> ProjectFn { return &ProjectWithJacobians<Model>; });
+  const ImgFromCamFn img_from_cam = VisitCameraModel(
+      camera.model_id,
+      []<typename Model>() -> ImgFromCamFn { return &Model::template ImgFromCam<double>; });
+  // A perspective lens sees only what is in front of it; a wider one whatever it projects.
+  const bool perspective = camera.Projection() == CameraProjection::kPerspective;
+  const auto observe = [&](size_t k, const Eigen::Vector3d& point_in_cam, Eigen::Vector2d* residual,
+                           Eigen::Matrix<double, 2, 3>* jacobian) {
+    if (perspective && !(point_in_cam.z() > std::numeric_limits<double>::epsilon())) return false;
+    Eigen::Vector2d projection;
+    if (jacobian == nullptr || !perspective) {
+      const bool projects = img_from_cam(params, point_in_cam.x(), point_in_cam.y(),
+                                         point_in_cam.z(), &projection.x(), &projection.y());
+      if (!perspective && !projects) return false;
+    }
+    if (jacobian != nullptr) project(params, point_in_cam, &projection, jacobian, nullptr);
+    *residual = projection - points2D[observation_indices[k]];
+    return true;
+  };
+  const CauchyLoss loss{options.loss_scale_px * options.loss_scale_px};
+  const bool solved = MinimizeOverPose(points, observe, loss, lm_options, &rotation, &translation);
   if (!solved || !rotation.allFinite() || !translation.allFinite()) return false;
   cam_from_world->rotation = Eigen::Quaterniond(rotation).normalized();
   cam_from_world->translation = translation;

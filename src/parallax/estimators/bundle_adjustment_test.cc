@@ -8,8 +8,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <vector>
 
+#include "parallax/geometry/testing/camera_model_params.h"
 #include "parallax/math/random.h"
 #include "parallax/util/check.h"
 #include "parallax/util/logging.h"
@@ -28,6 +30,8 @@ struct SceneOptions {
   // 0: every image sees every point; else each point is seen by this many consecutive images.
   int track_length = 0;
   double noise_px = 0;
+  // The camera; SIMPLE_RADIAL with k = 0.02 when unset.
+  std::optional<Camera> camera;
 };
 
 Rigid3d LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target) {
@@ -45,6 +49,7 @@ Reconstruction SynthesizeScene(const SceneOptions& options) {
   Reconstruction reconstruction;
   Camera camera = Camera::Create(1, CameraModelId::kSimpleRadial, kFocalLength, kWidth, kHeight);
   camera.params[3] = 0.02;
+  if (options.camera) camera = *options.camera;
   reconstruction.AddCamera(camera);
 
   std::vector<Image> images(options.num_images);
@@ -291,6 +296,35 @@ SceneWithOutliers MakeSceneWithOutliers() {
   scene.config = WholeModelConfig(scene.truth, /*fix_poses=*/false);
   Perturb(scene.config, 0.5, 0.02, 0.02, &scene.corrupted);
   return scene;
+}
+
+// Every camera model (16 parameters for RAD_TAN_THIN_PRISM_FISHEYE, none to refine for the
+// sphere): poses, points and the intrinsics a model has come back to the truth.
+TEST_P(BundleAdjustmentSolvers, EveryCameraModelAdjusts) {
+  for (const CameraModelId model : kCameraModelIds) {
+    SCOPED_TRACE(CameraModelName(model));
+    SetPRNGSeed(8);
+    SceneOptions scene;
+    scene.camera = Camera::Create(1, model, 0, 640, 480);
+    scene.camera->params = TestCameraParams(model);
+    const Reconstruction truth = SynthesizeScene(scene);
+    Reconstruction estimate = truth;
+    const BundleAdjustmentConfig config = WholeModelConfig(truth, /*fix_poses=*/false);
+    Perturb(config, 0.2, 0.01, 0.01, &estimate);
+    const std::vector<int> focal_idxs = CameraModelFocalIdxs(model);
+    for (int idx : focal_idxs) estimate.GetCamera(1).params[idx] *= 1.02;
+
+    BundleAdjustmentOptions options = TightOptions(GetParam());
+    options.refine_focal_length = true;
+    const BundleAdjustmentSummary summary = BundleAdjust(options, config, &estimate);
+    ASSERT_TRUE(summary.success) << summary.termination;
+    for (int idx : focal_idxs) {
+      EXPECT_NEAR(estimate.GetCamera(1).params[idx], truth.GetCamera(1).params[idx],
+                  1e-4 * truth.GetCamera(1).params[idx]);
+    }
+    EXPECT_EQ(estimate.GetCamera(1).params.size(), truth.GetCamera(1).params.size());
+    EXPECT_LT(CompareToTruth(truth, estimate).max_center, 1e-4);
+  }
 }
 
 TEST_P(BundleAdjustmentSolvers, RobustLossResistsOutliers) {

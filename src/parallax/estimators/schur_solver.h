@@ -29,7 +29,7 @@ constexpr double kMinRadius = 1e-32;
 constexpr double kMinDiagonal = 1e-6;
 constexpr double kMaxDiagonal = 1e32;
 constexpr double kMinRelativeDecrease = 1e-3;
-constexpr int kMaxCameraParams = 8;  // OPENCV's.
+constexpr int kMaxCameraParams = kMaxCameraModelNumParams;
 
 using Matrix26 = Eigen::Matrix<double, 2, 6>;
 using Matrix23 = Eigen::Matrix<double, 2, 3>;

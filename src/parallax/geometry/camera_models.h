@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <string>
 #include <vector>
@@ -575,6 +576,16 @@ struct CameraModel : Traits {
 #define PARALLAX_CAMERA_MODEL_TYPE(Name) using Name##Model = CameraModel<Name##Traits>;
 PARALLAX_CAMERA_MODELS(PARALLAX_CAMERA_MODEL_TYPE)
 #undef PARALLAX_CAMERA_MODEL_TYPE
+
+// The most parameters a registered model has (RAD_TAN_THIN_PRISM_FISHEYE's 16): what a
+// fixed-size buffer of one camera's parameters or Jacobian columns must hold.
+inline constexpr int kMaxCameraModelNumParams = [] {
+  int most = 0;
+#define PARALLAX_CAMERA_MODEL_MAX(Name) most = std::max(most, Name##Model::kNumParams);
+  PARALLAX_CAMERA_MODELS(PARALLAX_CAMERA_MODEL_MAX)
+#undef PARALLAX_CAMERA_MODEL_MAX
+  return most;
+}();
 
 // Every registered model's id, in registry order.
 inline constexpr CameraModelId kCameraModelIds[] = {

@@ -59,6 +59,7 @@ TEST(CameraModels, IdsNamesAndParametersMatchColmap) {
     EXPECT_EQ(static_cast<int>(all.size()) + metadata, colmap.num_params);
   }
   EXPECT_EQ(std::size(kCameraModelIds), std::size(kColmapModels));
+  EXPECT_EQ(kMaxCameraModelNumParams, 16);
   EXPECT_EQ(CameraModelIdFromName("SPHERICAL"), CameraModelId::kInvalid);
   EXPECT_FALSE(ExistsCameraModel(-1));
   EXPECT_FALSE(ExistsCameraModel(18));

@@ -183,12 +183,9 @@ class ReprojectionErrorCostFunction
   const Eigen::Vector2d observed_;
 };
 
-// Creates the cost function for a runtime camera model id.
-inline ceres::CostFunction* CreateReprojectionErrorCostFunction(CameraModelId model_id,
-                                                                const Eigen::Vector2d& point2D) {
-  return VisitCameraModel(model_id, [&]<typename Model>() -> ceres::CostFunction* {
-    return ReprojectionErrorCostFunction<Model>::Create(point2D);
-  });
-}
+// Creates the cost function for a runtime camera model id (reprojection_error.cc: every
+// model's cost function compiled once).
+ceres::CostFunction* CreateReprojectionErrorCostFunction(CameraModelId model_id,
+                                                         const Eigen::Vector2d& point2D);
 
 }  // namespace parallax
