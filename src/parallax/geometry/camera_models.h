@@ -286,6 +286,15 @@ bool DivisionProject(T fx, T fy, T cx, T cy, T k, T u, T v, T w, T* x, T* y) {
   return valid;
 }
 
+// The ray of a pixel under the division model: normalised distorted coordinates (x, y) and
+// (x, y, 1 + k (x^2 + y^2)), unit length.
+inline Eigen::Vector3d DivisionUnproject(double fx, double fy, double cx, double cy, double k,
+                                         const Eigen::Vector2d& xy) {
+  const Eigen::Vector2d distorted((xy.x() - cx) / fx, (xy.y() - cy) / fy);
+  return Eigen::Vector3d(distorted.x(), distorted.y(), 1.0 + k * distorted.squaredNorm())
+      .normalized();
+}
+
 struct SimpleDivisionTraits {
   static constexpr int kColmapId = 12;
   static constexpr const char* kName = "SIMPLE_DIVISION";
@@ -297,10 +306,7 @@ struct SimpleDivisionTraits {
     return DivisionProject(params[0], params[0], params[1], params[2], params[3], u, v, w, x, y);
   }
   static Eigen::Vector3d Unproject(const double* params, const Eigen::Vector2d& xy) {
-    const Eigen::Vector2d distorted((xy.x() - params[1]) / params[0],
-                                    (xy.y() - params[2]) / params[0]);
-    return Eigen::Vector3d(distorted.x(), distorted.y(), 1.0 + params[3] * distorted.squaredNorm())
-        .normalized();
+    return DivisionUnproject(params[0], params[0], params[1], params[2], params[3], xy);
   }
 };
 
@@ -315,10 +321,7 @@ struct DivisionTraits {
     return DivisionProject(params[0], params[1], params[2], params[3], params[4], u, v, w, x, y);
   }
   static Eigen::Vector3d Unproject(const double* params, const Eigen::Vector2d& xy) {
-    const Eigen::Vector2d distorted((xy.x() - params[2]) / params[0],
-                                    (xy.y() - params[3]) / params[1]);
-    return Eigen::Vector3d(distorted.x(), distorted.y(), 1.0 + params[4] * distorted.squaredNorm())
-        .normalized();
+    return DivisionUnproject(params[0], params[1], params[2], params[3], params[4], xy);
   }
 };
 

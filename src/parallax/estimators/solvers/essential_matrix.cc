@@ -496,6 +496,17 @@ void FivePoint(const std::vector<Point>& points1, const std::vector<Point>& poin
   }
 }
 
+// The nearest essential matrix (singular values (1, 1, 0), Hartley & Zisserman result 9.18)
+// of a least-squares solution, unit Frobenius norm, appended when finite.
+void PushEssentialProjection(const Eigen::Matrix3d& E_unconstrained,
+                             std::vector<Eigen::Matrix3d>* models) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(E_unconstrained,
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d E = svd.matrixU() * Eigen::Vector3d(1, 1, 0).asDiagonal() *
+                            svd.matrixV().transpose() / std::sqrt(2.0);
+  if (E.allFinite()) models->push_back(E);
+}
+
 }  // namespace
 
 void EstimateEssentialMatrixFivePoint(const std::vector<Eigen::Vector2d>& points1,
@@ -529,12 +540,7 @@ void EstimateEssentialMatrixEightPointFromRays(const std::vector<Eigen::Vector3d
   if (!(singular_values(7) > kMinRankRatio * singular_values(0))) return;
   const Vector9d entries = V.col(8);
   const Eigen::Matrix3d E_unconstrained = Eigen::Map<const RowMajorMatrix3d>(entries.data());
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(E_unconstrained,
-                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d E = svd.matrixU() * Eigen::Vector3d(1, 1, 0).asDiagonal() *
-                            svd.matrixV().transpose() / std::sqrt(2.0);
-  if (!E.allFinite()) return;
-  models->push_back(E);
+  PushEssentialProjection(E_unconstrained, models);
 }
 
 void EstimateEssentialMatrixEightPoint(const std::vector<Eigen::Vector2d>& points1,
@@ -547,12 +553,7 @@ void EstimateEssentialMatrixEightPoint(const std::vector<Eigen::Vector2d>& point
   // Project onto the essential manifold in the original normalised coordinates, where E's
   // structure (two equal singular values) holds.
   const Eigen::Matrix3d E_unconstrained = T2.transpose() * normalized_E * T1;
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(E_unconstrained,
-                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d E = svd.matrixU() * Eigen::Vector3d(1, 1, 0).asDiagonal() *
-                            svd.matrixV().transpose() / std::sqrt(2.0);
-  if (!E.allFinite()) return;
-  models->push_back(E);
+  PushEssentialProjection(E_unconstrained, models);
 }
 
 }  // namespace parallax
