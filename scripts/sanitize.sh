@@ -48,7 +48,8 @@ cmake --build "$build" -j"$jobs"
 step "unit tests"
 export PARALLAX_DATA="${PARALLAX_DATA:-$(cd .. && pwd)/shared/data}"
 # Left out: the end-to-end runs on templeRing, the chessboard photos and the synthetic scenes
-# (30 views; 20 views mapped three times for added photos), the hard scenes (30 to 40 views)
+# (30 views; 20 views mapped three times for added photos), the hard scenes (30 to 40 views),
+# the 190-degree fisheye (30 views)
 # and the colmap drop-in's full sequences (the end-to-end step below runs one); the repeated reconstructions of
 # the resume, determinism and rerun tests (the photo changed, touched or removed between two
 # runs; the same clusters mapped on other threads): one to three minutes each under ASan, and
@@ -58,7 +59,7 @@ export PARALLAX_DATA="${PARALLAX_DATA:-$(cd .. && pwd)/shared/data}"
 # (DistributedTest) are left out too: this build has no MPI.
 heavy='TempleRingTest\.|TempleRingFirstViews|TempleRingFigures|FramesTheTempleRing'
 heavy+='|CheckerboardDataset|SyntheticTempleThirtyViews|PhotosAddedLater|ResumeTest|DeterminismTest'
-heavy+='|SameResultWhicheverThreadMapsACluster|DistributedTest\.|HardScenesTest\.'
+heavy+='|SameResultWhicheverThreadMapsACluster|DistributedTest\.|HardScenesTest\.|WideLens\.'
 heavy+='|ColmapDropInTest\.(GaussianSplattings|VocabTreeMatching)'
 # The retrieval suite renders and describes 24 views in each test's process: about 190 s of
 # CPU per test here. Its bad-tree test stays (an error path); the normal job runs the others.
