@@ -43,9 +43,11 @@ bool IsOpenCvFisheyeFamily(CameraModelId model_id) {
 void RequireModelFamily(const Camera& camera, const std::string& format, bool fisheye_allowed) {
   if (!IsOpenCvFamily(camera.model_id) &&
       !(fisheye_allowed && IsOpenCvFisheyeFamily(camera.model_id))) {
+    // A sphere has no pinhole view to undistort into: no advice to give.
+    const bool spherical = camera.Projection() == CameraProjection::kSpherical;
     throw InputError(format + ": camera " + std::to_string(camera.camera_id) + " is " +
-                     camera.ModelName() + ", which " + format +
-                     " cannot describe; write undistorted images first (parallax undistort)");
+                     camera.ModelName() + ", which " + format + " cannot describe" +
+                     (spherical ? "" : "; write undistorted images first (parallax undistort)"));
   }
 }
 

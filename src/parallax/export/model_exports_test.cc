@@ -158,6 +158,13 @@ TEST(Nerfstudio, FisheyeAndSphericalCamerasKeepTheirModels) {
   EXPECT_EQ(equirect["camera_model"], "EQUIRECTANGULAR");
   EXPECT_EQ(equirect["w"], 2048);
   EXPECT_DOUBLE_EQ(equirect["cx"].get<double>(), 1024);
+  try {
+    WriteNvm(sphere, test::ScopedTestDir("nvm_sphere").path() / "model.nvm");
+    ADD_FAILURE() << "a sphere was exported to NVM";
+  } catch (const InputError& error) {
+    // No advice to undistort: undistort refuses the sphere too.
+    EXPECT_EQ(std::string(error.what()).find("undistort"), std::string::npos) << error.what();
+  }
 
   Camera fov = Camera::Create(1, CameraModelId::kFOV, 500, 640, 480);
   const Reconstruction fov_model = ExactModel(fov);
