@@ -109,8 +109,7 @@ int RunSynth(int argc, char** argv) {
       std::cout << ", f = " << options.EffectiveFocalLength() << " px";
     }
     std::cout << ") in " << output_dir << "; cameras in "
-              << (views.GetCamera(1).model_id == CameraModelId::kPinhole ||
-                          views.GetCamera(1).model_id == CameraModelId::kSimplePinhole
+              << (IsPinholeCameraModel(views.GetCamera(1).model_id)
                       ? options.name + "_par.txt, K.txt, gt/; "
                       : std::string("gt/; "))
               << timer.ElapsedSeconds() << " s" << std::endl;

@@ -40,27 +40,35 @@ Eigen::Vector2d InvertDistortion(const Distort& distort, const Eigen::Vector2d& 
 
 }  // namespace
 
+// Normalised (or, for a fisheye, fisheye) coordinates of a pixel with the distortion undone:
+// focal length and principal point removed, then InvertDistortion. Both unprojections of the
+// models without a closed form start from these.
+template <typename Traits>
+Eigen::Vector2d UndistortedCoordinates(const double* params, const Eigen::Vector2d& xy) {
+  const double fx = params[Traits::kFocalIdxs.front()];
+  const double fy = params[Traits::kFocalIdxs.back()];
+  const Eigen::Vector2d distorted((xy.x() - params[Traits::kPrincipalPointIdxs[0]]) / fx,
+                                  (xy.y() - params[Traits::kPrincipalPointIdxs[1]]) / fy);
+  if constexpr (CameraModel<Traits>::kNumExtraParams == 0) {
+    return distorted;
+  } else {
+    return InvertDistortion(
+        [&](const Eigen::Vector2d& p) {
+          Eigen::Vector2d d;
+          Traits::Distortion(params, p.x(), p.y(), &d.x(), &d.y());
+          return d;
+        },
+        distorted);
+  }
+}
+
 template <typename Traits>
 Eigen::Vector3d CameraModel<Traits>::CamRayFromImg(const double* params,
                                                    const Eigen::Vector2d& xy) {
   if constexpr (kHasClosedForm) {
     return Traits::Unproject(params, xy);
   } else {
-    // Undo focal length and principal point: distorted normalised (or fisheye) coordinates.
-    const double fx = params[Traits::kFocalIdxs.front()];
-    const double fy = params[Traits::kFocalIdxs.back()];
-    const Eigen::Vector2d distorted((xy.x() - params[Traits::kPrincipalPointIdxs[0]]) / fx,
-                                    (xy.y() - params[Traits::kPrincipalPointIdxs[1]]) / fy);
-    Eigen::Vector2d undistorted = distorted;
-    if constexpr (kNumExtraParams > 0) {
-      undistorted = InvertDistortion(
-          [&](const Eigen::Vector2d& p) {
-            Eigen::Vector2d d;
-            Traits::Distortion(params, p.x(), p.y(), &d.x(), &d.y());
-            return d;
-          },
-          distorted);
-    }
+    const Eigen::Vector2d undistorted = UndistortedCoordinates<Traits>(params, xy);
     if constexpr (kProjection == CameraProjection::kPerspective) {
       return undistorted.homogeneous().normalized();
     } else {
@@ -77,21 +85,7 @@ template <typename Traits>
 Eigen::Vector2d CameraModel<Traits>::CamFromImg(const double* params, const Eigen::Vector2d& xy) {
   if constexpr (kProjection == CameraProjection::kPerspective && !kHasClosedForm) {
     // Straight from the undistorted normalised coordinates: no ray to normalise.
-    const double fx = params[Traits::kFocalIdxs.front()];
-    const double fy = params[Traits::kFocalIdxs.back()];
-    const Eigen::Vector2d distorted((xy.x() - params[Traits::kPrincipalPointIdxs[0]]) / fx,
-                                    (xy.y() - params[Traits::kPrincipalPointIdxs[1]]) / fy);
-    if constexpr (kNumExtraParams == 0) {
-      return distorted;
-    } else {
-      return InvertDistortion(
-          [&](const Eigen::Vector2d& p) {
-            Eigen::Vector2d d;
-            Traits::Distortion(params, p.x(), p.y(), &d.x(), &d.y());
-            return d;
-          },
-          distorted);
-    }
+    return UndistortedCoordinates<Traits>(params, xy);
   } else {
     return CamRayFromImg(params, xy).hnormalized();
   }

@@ -614,6 +614,10 @@ std::vector<int> CameraModelFocalIdxs(CameraModelId model_id);
 std::vector<int> CameraModelPrincipalPointIdxs(CameraModelId model_id);
 std::vector<int> CameraModelExtraIdxs(CameraModelId model_id);
 CameraProjection CameraModelProjection(CameraModelId model_id);
+// SIMPLE_PINHOLE or PINHOLE: what a K matrix describes exactly.
+constexpr bool IsPinholeCameraModel(CameraModelId model_id) {
+  return model_id == CameraModelId::kSimplePinhole || model_id == CameraModelId::kPinhole;
+}
 // Parameters for a camera of this model with the given focal length and principal point
 // and the model's initial distortion (zero but for FOV and EUCM, whose refinement cannot
 // start from zero). A spherical model's parameters are the image size, twice the principal

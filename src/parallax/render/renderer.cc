@@ -54,8 +54,7 @@ cv::Mat RenderView(const SceneModel& scene, const Camera& camera, const Rigid3d&
   PARALLAX_CHECK_GT(camera.width, 0u);
   PARALLAX_CHECK_GT(camera.height, 0u);
   const int width = static_cast<int>(camera.width), height = static_cast<int>(camera.height);
-  const bool pinhole = camera.model_id == CameraModelId::kSimplePinhole ||
-                       camera.model_id == CameraModelId::kPinhole;
+  const bool pinhole = IsPinholeCameraModel(camera.model_id);
   const double fx = pinhole ? camera.FocalLengthX() : 0.0,
                fy = pinhole ? camera.FocalLengthY() : 0.0;
   const double cx = pinhole ? camera.PrincipalPointX() : 0.0;

@@ -186,18 +186,13 @@ void SyntheticSceneOptions::Check() const {
   PARALLAX_CHECK(!name.empty());
   PARALLAX_CHECK_MSG(ExistsCameraModel(static_cast<int>(camera_model)), "unknown camera model");
   if (!camera_params.empty()) {
-    Camera camera;
-    camera.model_id = camera_model;
-    camera.width = width;
-    camera.height = height;
-    camera.params = camera_params;
     if (static_cast<int>(camera_params.size()) != CameraModelNumParams(camera_model)) {
       throw InputError("--camera-params: " + std::to_string(camera_params.size()) +
                        " values, but " + CameraModelName(camera_model) + " takes " +
                        std::to_string(CameraModelNumParams(camera_model)) + " (" +
                        CameraModelParamsInfo(camera_model) + ")");
     }
-    if (!camera.VerifyParams()) {
+    if (!SyntheticCamera(*this).VerifyParams()) {
       throw InputError("--camera-params: focal lengths must be positive and finite");
     }
   }
@@ -456,8 +451,7 @@ Reconstruction GenerateSyntheticScene(const SyntheticSceneOptions& options,
 
   // K.txt and the Middlebury file describe a pinhole; any other lens has gt/cameras.txt
   // only, or a reconstruction would take K.txt for its intrinsics.
-  const bool pinhole = camera.model_id == CameraModelId::kPinhole ||
-                       camera.model_id == CameraModelId::kSimplePinhole;
+  const bool pinhole = IsPinholeCameraModel(camera.model_id);
   const Eigen::Matrix3d K = pinhole ? camera.CalibrationMatrix() : Eigen::Matrix3d::Identity();
   if (pinhole)
     WriteFileAtomically(output_dir / (options.name + "_par.txt"), [&](std::ostream& stream) {
